@@ -1,0 +1,117 @@
+//! Brute force: every ray against every primitive. The oracle of the tests.
+
+use super::triangle::{moller_trumbore, WatertightRay};
+use super::{Accel, AccelStats, Hit, TriangleTest};
+use crate::math::Ray;
+use crate::scene::{Mesh, Scene, Shape};
+use std::sync::Arc;
+
+/// Tests every object and every triangle.
+pub struct BruteForce {
+    objects: Vec<BruteObject>,
+    test: TriangleTest,
+}
+
+enum BruteObject {
+    Sphere(crate::scene::Sphere),
+    Quad(crate::scene::Quad),
+    Mesh(Arc<Mesh>, crate::math::Transform),
+}
+
+impl BruteForce {
+    /// Wraps the scene's objects.
+    pub fn new(scene: &Scene, test: TriangleTest) -> Self {
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Sphere(s) => BruteObject::Sphere(*s),
+                Shape::Quad(q) => BruteObject::Quad(*q),
+                Shape::Mesh { mesh, transform, .. } => {
+                    BruteObject::Mesh(scene.meshes[*mesh as usize].clone(), *transform)
+                }
+            })
+            .collect();
+        Self { objects, test }
+    }
+
+    fn query(&self, ray: &Ray, t_max: f32, any: bool) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_max = t_max;
+        for (i, object) in self.objects.iter().enumerate() {
+            let instance = i as u32;
+            match object {
+                BruteObject::Sphere(s) => {
+                    if let Some(t) = s.intersect(ray, t_max) {
+                        best = Some(Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u: 0.0,
+                            v: 0.0,
+                        });
+                        t_max = t;
+                    }
+                }
+                BruteObject::Quad(q) => {
+                    if let Some((t, u, v)) = q.intersect(ray, t_max) {
+                        best = Some(Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u,
+                            v,
+                        });
+                        t_max = t;
+                    }
+                }
+                BruteObject::Mesh(mesh, transform) => {
+                    let local = transform.ray_to_object(ray);
+                    let wt = WatertightRay::new(&local);
+                    for prim in 0..mesh.triangles.len() {
+                        let [p0, p1, p2] = mesh.corners(prim);
+                        let h = match self.test {
+                            TriangleTest::Watertight => wt.intersect(p0, p1, p2, t_max),
+                            TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, t_max),
+                        };
+                        if let Some((t, u, v)) = h {
+                            best = Some(Hit {
+                                t,
+                                instance,
+                                prim: prim as u32,
+                                u,
+                                v,
+                            });
+                            t_max = t;
+                            if any {
+                                return best;
+                            }
+                        }
+                    }
+                }
+            }
+            if any && best.is_some() {
+                return best;
+            }
+        }
+        best
+    }
+}
+
+impl Accel for BruteForce {
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.query(ray, t_max, false)
+    }
+
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.query(ray, t_max, true).is_some()
+    }
+
+    fn stats(&self) -> AccelStats {
+        AccelStats {
+            name: "brute".into(),
+            instances: self.objects.len(),
+            ..Default::default()
+        }
+    }
+}

@@ -1,0 +1,143 @@
+//! Ray-query accelerators behind one contract.
+//!
+//! Both real backends (Embree and the in-house KD-tree) are two-level: one
+//! bottom-level structure per distinct mesh, in object space, and a top level
+//! over the objects (mesh instances with their transforms, spheres, quads).
+//! `brute` tests everything and is the oracle of the tests.
+
+pub mod brute;
+pub mod kdtree;
+pub mod triangle;
+
+use crate::math::Ray;
+use crate::scene::Scene;
+use std::time::Duration;
+use thiserror::Error;
+
+/// The closest hit of a ray. Surface data is computed afterwards from the
+/// scene (`Scene::surface_interaction`), so every backend agrees on this alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit (world space; `origin + t·dir`).
+    pub t: f32,
+    /// Object index (`Scene::objects`).
+    pub instance: u32,
+    /// Triangle index within the object's mesh; 0 for analytic shapes.
+    pub prim: u32,
+    /// Barycentric `u` (weight of the triangle's second vertex) or the quad's first coordinate.
+    pub u: f32,
+    /// Barycentric `v` (weight of the third vertex) or the quad's second coordinate.
+    pub v: f32,
+}
+
+/// A ray-query accelerator.
+pub trait Accel: Send + Sync {
+    /// Closest hit with `0 < t < t_max`.
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit>;
+    /// True when anything is hit with `0 < t < t_max` (any-hit; shadow rays).
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
+    /// Build statistics.
+    fn stats(&self) -> AccelStats;
+}
+
+/// Which accelerator to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AccelKind {
+    /// Intel Embree 4 (instanced BLAS/TLAS).
+    Embree,
+    /// The in-house two-level SAH KD-tree.
+    KdTree,
+    /// Test every primitive (the test oracle).
+    Brute,
+}
+
+impl AccelKind {
+    /// Name as used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::Embree => "embree",
+            AccelKind::KdTree => "kdtree",
+            AccelKind::Brute => "brute",
+        }
+    }
+
+    /// The default: Embree when compiled in, else the KD-tree.
+    pub fn default_kind() -> Self {
+        if cfg!(feature = "embree") {
+            AccelKind::Embree
+        } else {
+            AccelKind::KdTree
+        }
+    }
+}
+
+/// Ray–triangle intersection test used by the in-house backends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TriangleTest {
+    /// Watertight test (Woop, Benthin, Wald 2013): no ray slips between
+    /// triangles that share an edge.
+    Watertight,
+    /// Möller–Trumbore 1997 (the original report's choice).
+    MollerTrumbore,
+}
+
+/// Statistics reported by `caustic info` and the benchmarks.
+#[derive(Clone, Debug, Default)]
+pub struct AccelStats {
+    /// Backend name.
+    pub name: String,
+    /// Wall time of the build.
+    pub build_time: Duration,
+    /// Bytes held by the acceleration structures (not counting the scene's meshes).
+    pub memory_bytes: usize,
+    /// Bottom-level structures built (one per distinct mesh).
+    pub blas_count: usize,
+    /// Top-level entries (objects).
+    pub instances: usize,
+    /// Free-form details (node counts, depth, version...).
+    pub details: Vec<(String, String)>,
+}
+
+/// Accelerator construction failure.
+#[derive(Debug, Error)]
+pub enum AccelError {
+    /// The requested backend is not compiled in.
+    #[error("accelerator '{0}' is not available in this build (compiled without the `embree` feature)")]
+    Unavailable(&'static str),
+    /// Embree reported an error.
+    #[error("Embree: {0}")]
+    Embree(String),
+    /// The scene cannot be indexed by the backend.
+    #[error("{0}")]
+    Scene(String),
+}
+
+/// Build options shared by the backends.
+#[derive(Clone, Debug)]
+pub struct AccelOptions {
+    /// Triangle test (in-house backends).
+    pub triangle_test: TriangleTest,
+    /// Embree build quality: "low", "medium" or "high".
+    pub embree_quality: String,
+    /// Embree robust mode (`RTC_SCENE_FLAG_ROBUST`).
+    pub embree_robust: bool,
+}
+
+impl Default for AccelOptions {
+    fn default() -> Self {
+        Self {
+            triangle_test: TriangleTest::Watertight,
+            embree_quality: "high".into(),
+            embree_robust: false,
+        }
+    }
+}
+
+/// Builds the accelerator `kind` over `scene`.
+pub fn build(scene: &Scene, kind: AccelKind, options: &AccelOptions) -> Result<Box<dyn Accel>, AccelError> {
+    match kind {
+        AccelKind::Brute => Ok(Box::new(brute::BruteForce::new(scene, options.triangle_test))),
+        AccelKind::KdTree => Ok(Box::new(kdtree::KdTreeAccel::build(scene, options))),
+        AccelKind::Embree => Err(AccelError::Unavailable("embree")),
+    }
+}

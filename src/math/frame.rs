@@ -1,0 +1,46 @@
+use super::Vec3A;
+
+/// Orthonormal frame around a unit normal (Duff et al. 2017, "Building an
+/// Orthonormal Basis, Revisited"): branch-free and continuous except at one sign flip.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    /// First tangent.
+    pub s: Vec3A,
+    /// Second tangent.
+    pub t: Vec3A,
+    /// Normal.
+    pub n: Vec3A,
+}
+
+impl Frame {
+    /// Frame whose `n` axis is the unit vector `n`.
+    pub fn from_normal(n: Vec3A) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3A::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
+    }
+
+    /// Local coordinates to world.
+    #[inline]
+    pub fn to_world(&self, v: Vec3A) -> Vec3A {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal() {
+        for n in [Vec3A::Z, -Vec3A::Z, Vec3A::X, Vec3A::new(0.3, -0.5, 0.8).normalize()] {
+            let f = Frame::from_normal(n);
+            assert!(f.s.dot(f.t).abs() < 1e-6 && f.s.dot(f.n).abs() < 1e-6);
+            assert!((f.s.length() - 1.0).abs() < 1e-6 && (f.t.length() - 1.0).abs() < 1e-6);
+            assert!((f.to_world(Vec3A::Z) - n).length() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,231 @@
+//! The scene: what the TOML file describes, validated and immutable
+//! (`Send + Sync`), plus the surface query that turns an accelerator's `Hit`
+//! into shading data.
+
+pub mod camera;
+pub mod desc;
+pub mod generate;
+pub mod light;
+pub mod load;
+pub mod material;
+pub mod mesh;
+pub mod shape;
+
+use crate::accel::{Hit, TriangleTest};
+use crate::math::{Aabb, Ray, Transform, Vec3A};
+use std::sync::Arc;
+
+pub use camera::Camera;
+pub use light::{AreaLight, Light};
+pub use load::{load_scene, SceneError};
+pub use material::{Dielectric, Material, Mirror, ShadingModel};
+pub use mesh::Mesh;
+pub use shape::{Quad, Sphere};
+
+/// Tone mapping applied before 8-bit output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ToneMap {
+    /// ACES filmic curve.
+    Aces,
+    /// Clamp to [0, 1].
+    Clamp,
+}
+
+/// How secondary work is shared between a pixel's samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleSharing {
+    /// spp > 1: each sample takes one stratum of the area lights' shadow
+    /// samples and one Fresnel-weighted branch at dielectrics.
+    Spread,
+    /// Every sample casts all shadow rays and follows both branches.
+    Split,
+}
+
+/// Render settings (the `[render]` table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum number of specular bounces.
+    pub max_depth: u32,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Tone mapping for the PNG.
+    pub tone_map: ToneMap,
+    /// Exposure in stops (scales linear radiance by 2^exposure before tone mapping).
+    pub exposure: f32,
+    /// Ambient light (multiplied by each material's ambient colour).
+    pub ambient: Vec3A,
+    /// Ray–triangle test.
+    pub triangle_test: TriangleTest,
+    /// Sample sharing (spp > 1).
+    pub sharing: SampleSharing,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            spp: 1,
+            max_depth: 8,
+            seed: 0,
+            tone_map: ToneMap::Aces,
+            exposure: 0.0,
+            ambient: Vec3A::ZERO,
+            triangle_test: TriangleTest::Watertight,
+            sharing: SampleSharing::Spread,
+        }
+    }
+}
+
+/// The geometry of an object.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// Analytic sphere (world space).
+    Sphere(Sphere),
+    /// Analytic quad (world space).
+    Quad(Quad),
+    /// An instance of `Scene::meshes[mesh]`.
+    Mesh {
+        /// Index into `Scene::meshes`.
+        mesh: u32,
+        /// Object to world.
+        transform: Transform,
+        /// Interpolate vertex normals (else flat facets).
+        smooth: bool,
+    },
+}
+
+/// One object of the scene: an instance in the top level of the accelerators.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Name (from the file, or generated) for messages.
+    pub name: String,
+    /// Geometry.
+    pub shape: Shape,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Render settings.
+    pub settings: RenderSettings,
+    /// Camera.
+    pub camera: Camera,
+    /// Materials, referenced by index.
+    pub materials: Vec<Material>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// Distinct meshes (a file used by several objects is loaded once).
+    pub meshes: Vec<Arc<Mesh>>,
+    /// Objects (the top-level instances).
+    pub objects: Vec<Object>,
+}
+
+/// Shading data at a hit, in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceInteraction {
+    /// Hit point.
+    pub p: Vec3A,
+    /// Absolute error bound of `p` (for `offset_ray_origin`).
+    pub p_error: Vec3A,
+    /// Unit geometric normal (outward for closed shapes; not flipped toward the ray).
+    pub ng: Vec3A,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3A,
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Object index.
+    pub object: u32,
+    /// Material index.
+    pub material: u32,
+}
+
+impl Scene {
+    /// Bounds of object `i` in world space.
+    pub fn object_bounds(&self, i: usize) -> Aabb {
+        match &self.objects[i].shape {
+            Shape::Sphere(s) => s.bounds(),
+            Shape::Quad(q) => q.bounds(),
+            Shape::Mesh { mesh, transform, .. } => transform.bounds(&self.meshes[*mesh as usize].bounds()),
+        }
+    }
+
+    /// Bounds of the whole scene.
+    pub fn bounds(&self) -> Aabb {
+        (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(self.object_bounds(i)))
+    }
+
+    /// Number of triangles the objects reference, counting every instance.
+    pub fn instanced_triangles(&self) -> u64 {
+        self.objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Mesh { mesh, .. } => self.meshes[*mesh as usize].triangles.len() as u64,
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// Turns an accelerator hit into shading data (pbrt's `Intersect` /
+    /// Mitsuba's `compute_surface_interaction`): both backends report only
+    /// `(t, instance, prim, u, v)`, and this is the one place that interprets it.
+    pub fn surface_interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        let object = &self.objects[hit.instance as usize];
+        let (p, p_error, ng, ns) = match &object.shape {
+            Shape::Sphere(s) => {
+                let (p, n, err) = s.surface(ray, hit.t);
+                (p, err, n, n)
+            }
+            Shape::Quad(q) => {
+                let (p, err) = q.surface(hit.u, hit.v);
+                (p, err, q.normal, q.normal)
+            }
+            Shape::Mesh {
+                mesh,
+                transform,
+                smooth,
+            } => {
+                let mesh = &self.meshes[*mesh as usize];
+                let tri = mesh.triangles[hit.prim as usize];
+                let [p0, p1, p2] = mesh.corners(hit.prim as usize);
+                let (b1, b2) = (hit.u, hit.v);
+                let b0 = 1.0 - b1 - b2;
+                // Barycentric reconstruction: error γ(7)Σ|bᵢpᵢ| (pbrt-v4 §6.8.5).
+                let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
+                let err_obj = ((p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs()) * crate::math::gamma(7);
+                let ng_obj = (p1 - p0).cross(p2 - p0);
+                let ng = transform.normal(ng_obj).normalize_or(Vec3A::Z);
+                let ns = if *smooth {
+                    let n = |i: u32| Vec3A::from(mesh.normals[i as usize]);
+                    let ns_obj = n(tri[0]) * b0 + n(tri[1]) * b1 + n(tri[2]) * b2;
+                    let ns = transform.normal(ns_obj).normalize_or(ng);
+                    if ns.dot(ng) < 0.0 {
+                        -ns
+                    } else {
+                        ns
+                    }
+                } else {
+                    ng
+                };
+                (transform.point(p_obj), transform.point_error(p_obj, err_obj), ng, ns)
+            }
+        };
+        SurfaceInteraction {
+            p,
+            p_error,
+            ng,
+            ns,
+            t: hit.t,
+            object: hit.instance,
+            material: object.material,
+        }
+    }
+}
