@@ -17,7 +17,7 @@ use std::sync::Arc;
 
 pub use camera::Camera;
 pub use light::{AreaLight, Light};
-pub use load::{load_scene, SceneError};
+pub use load::{load_scene, parse_scene, SceneError};
 pub use material::{Dielectric, Material, Mirror, ShadingModel};
 pub use mesh::Mesh;
 pub use shape::{Quad, Sphere};

@@ -1,0 +1,338 @@
+//! The scene format: every documented key parses into the validated scene,
+//! defaults are the documented ones, and the shipped test scenes load.
+
+use caustic::accel::TriangleTest;
+use caustic::math::Vec3A;
+use caustic::scene::{load_scene, parse_scene, Light, SampleSharing, Scene, ShadingModel, Shape, ToneMap};
+use std::path::Path;
+
+fn parse(text: &str) -> Scene {
+    parse_scene(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn close(a: Vec3A, b: Vec3A) -> bool {
+    (a - b).length() < 1e-5
+}
+
+const EVERY_KEY: &str = r#"
+[render]
+width = 320
+height = 200
+spp = 9
+max_depth = 6
+seed = 1234567890123
+tone_map = "clamp"
+exposure = -1.5
+ambient = [0.1, 0.2, 0.3]
+triangle_test = "moller-trumbore"
+sharing = "split"
+
+[camera]
+position = [1, 2, 3]
+look_at = [1, 2, -7]
+up = [0, 1, 0]
+vfov = 30.5
+
+[materials.shiny]
+model = "phong"
+ambient = [0.1, 0.1, 0.1]
+diffuse = [0.5, 0.4, 0.3]
+specular = [0.9, 0.9, 0.9]
+shininess = 120
+mirror = { reflectivity = 0.25, tint = [1.0, 0.9, 0.8] }
+
+[materials.glass]
+model = "blinn-phong"
+diffuse = [0, 0, 0]
+
+[materials.glass.dielectric]
+ior = 1.33
+tint = [0.9, 1.0, 1.0]
+
+[[lights]]
+type = "point"
+position = [0, 5, 0]
+colour = [1.0, 0.5, 0.25]
+intensity = 8
+
+[[lights]]
+type = "area"
+position = [0, 4, 0]
+u = [2, 0, 0]
+v = [0, 0, 1]
+color = [1, 1, 1]
+intensity = 3
+samples = 48
+
+[[objects]]
+name = "ball"
+type = "sphere"
+center = [0, 1, -2]
+radius = 1.5
+material = "glass"
+
+[[objects]]
+type = "quad"
+corner = [-1, 0, 1]
+u = [2, 0, 0]
+v = [0, 0, -2]
+material = "shiny"
+
+[[objects]]
+name = "floor"
+type = "quad"
+center = [0, 0, 0]
+size = [4, 2]
+normal = [0, 1, 0]
+material = "shiny"
+
+[[objects]]
+name = "wall"
+type = "quad"
+center = [0, 1, -5]
+size = [6, 2]
+normal = [1, 0, 0]
+up = [0, 0, 1]
+material = "shiny"
+
+[[objects]]
+name = "tilted"
+type = "quad"
+center = [3, 3, 3]
+size = [1, 3]
+rotate = [-90, 0, 0]
+material = "shiny"
+"#;
+
+#[test]
+fn every_documented_key_is_parsed() {
+    let s = parse(EVERY_KEY);
+    let r = &s.settings;
+    assert_eq!(
+        (r.width, r.height, r.spp, r.max_depth, r.seed),
+        (320, 200, 9, 6, 1234567890123)
+    );
+    assert_eq!(r.tone_map, ToneMap::Clamp);
+    assert_eq!(r.exposure, -1.5);
+    assert!(close(r.ambient, Vec3A::new(0.1, 0.2, 0.3)));
+    assert_eq!(r.triangle_test, TriangleTest::MollerTrumbore);
+    assert_eq!(r.sharing, SampleSharing::Split);
+
+    assert!(close(s.camera.position, Vec3A::new(1.0, 2.0, 3.0)));
+    assert!(close(s.camera.forward, -Vec3A::Z));
+    assert!(close(s.camera.up, Vec3A::Y));
+    assert_eq!(s.camera.vfov_deg, 30.5);
+
+    // Materials are indexed in name order.
+    let names: Vec<_> = s.materials.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["glass", "shiny"]);
+    let shiny = &s.materials[1];
+    assert_eq!(shiny.model, ShadingModel::Phong);
+    assert!(close(shiny.ambient, Vec3A::splat(0.1)));
+    assert!(close(shiny.diffuse, Vec3A::new(0.5, 0.4, 0.3)));
+    assert!(close(shiny.specular, Vec3A::splat(0.9)));
+    assert_eq!(shiny.shininess, 120.0);
+    let m = shiny.mirror.unwrap();
+    assert_eq!(m.reflectivity, 0.25);
+    assert!(close(m.tint, Vec3A::new(1.0, 0.9, 0.8)));
+    assert!(shiny.dielectric.is_none());
+    let glass = &s.materials[0];
+    assert_eq!(glass.model, ShadingModel::BlinnPhong);
+    let d = glass.dielectric.unwrap();
+    assert_eq!(d.ior, 1.33);
+    assert!(close(d.tint, Vec3A::new(0.9, 1.0, 1.0)));
+    assert!(glass.is_specular() && !glass.is_diffuse());
+
+    match &s.lights[0] {
+        Light::Point { position, intensity } => {
+            assert!(close(*position, Vec3A::new(0.0, 5.0, 0.0)));
+            assert!(close(*intensity, Vec3A::new(8.0, 4.0, 2.0)));
+        }
+        l => panic!("{l:?}"),
+    }
+    match &s.lights[1] {
+        Light::Area(a) => {
+            assert!(close(a.center, Vec3A::new(0.0, 4.0, 0.0)));
+            assert!(close(a.u, Vec3A::new(2.0, 0.0, 0.0)) && close(a.v, Vec3A::Z));
+            // Emits toward u × v: down.
+            assert!(close(a.normal, -Vec3A::Y));
+            assert!(close(a.radiance, Vec3A::splat(3.0)));
+            assert_eq!(a.samples, 48);
+        }
+        l => panic!("{l:?}"),
+    }
+
+    assert_eq!(s.objects.len(), 5);
+    assert_eq!(s.objects[0].name, "ball");
+    assert_eq!(s.objects[0].material, 0);
+    match &s.objects[0].shape {
+        Shape::Sphere(sp) => {
+            assert!(close(sp.center, Vec3A::new(0.0, 1.0, -2.0)));
+            assert_eq!(sp.radius, 1.5);
+        }
+        o => panic!("{o:?}"),
+    }
+    // Unnamed objects get `type#index`.
+    assert_eq!(s.objects[1].name, "quad#1");
+    assert_eq!(s.objects[1].material, 1);
+    let quad = |i: usize| match &s.objects[i].shape {
+        Shape::Quad(q) => *q,
+        o => panic!("{o:?}"),
+    };
+    let q = quad(1);
+    assert!(close(q.corner, Vec3A::new(-1.0, 0.0, 1.0)));
+    assert!(close(q.normal, Vec3A::Y));
+    // Floor: width along +x, height along −z (the default `up` for a quad
+    // facing ±y), centred on `center`.
+    let q = quad(2);
+    assert!(close(q.u, Vec3A::new(4.0, 0.0, 0.0)), "{q:?}");
+    assert!(close(q.v, Vec3A::new(0.0, 0.0, -2.0)), "{q:?}");
+    assert!(close(q.normal, Vec3A::Y));
+    assert!(close(q.corner + (q.u + q.v) * 0.5, Vec3A::ZERO));
+    // Wall facing +x with its height along +z.
+    let q = quad(3);
+    assert!(close(q.normal, Vec3A::X));
+    assert!(close(q.v, Vec3A::new(0.0, 0.0, 2.0)));
+    assert!(close(q.u, Vec3A::new(0.0, 6.0, 0.0)), "{q:?}");
+    // rotate = [-90, 0, 0] turns the canonical +z-facing quad to face +y;
+    // its height (canonical +y) then runs along −z.
+    let q = quad(4);
+    assert!(close(q.normal, Vec3A::Y), "{q:?}");
+    assert!(close(q.u, Vec3A::X), "{q:?}");
+    assert!(close(q.v, Vec3A::new(0.0, 0.0, -3.0)), "{q:?}");
+    assert!(close(q.corner + (q.u + q.v) * 0.5, Vec3A::splat(3.0)));
+    assert!(s.meshes.is_empty());
+}
+
+#[test]
+fn defaults_are_the_documented_ones() {
+    let s = parse(
+        r#"
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+
+[materials.plain]
+
+[[lights]]
+type = "point"
+position = [0, 5, 0]
+
+[[lights]]
+type = "area"
+position = [0, 4, 0]
+u = [1, 0, 0]
+v = [0, 0, 1]
+"#,
+    );
+    let r = &s.settings;
+    assert_eq!((r.width, r.height, r.spp, r.max_depth, r.seed), (640, 480, 1, 8, 0));
+    assert_eq!(r.tone_map, ToneMap::Aces);
+    assert_eq!(r.exposure, 0.0);
+    assert_eq!(r.ambient, Vec3A::ZERO);
+    assert_eq!(r.triangle_test, TriangleTest::Watertight);
+    assert_eq!(r.sharing, SampleSharing::Spread);
+    assert_eq!(s.camera.vfov_deg, 45.0);
+    assert!(close(s.camera.up, Vec3A::Y));
+    let m = &s.materials[0];
+    assert_eq!(m.model, ShadingModel::BlinnPhong);
+    assert!(close(m.diffuse, Vec3A::splat(0.8)));
+    assert!(close(m.ambient, m.diffuse), "ambient defaults to diffuse");
+    assert_eq!(m.specular, Vec3A::ZERO);
+    assert_eq!(m.shininess, 32.0);
+    assert!(m.mirror.is_none() && m.dielectric.is_none());
+    assert_eq!(
+        s.lights[0],
+        Light::Point {
+            position: Vec3A::new(0.0, 5.0, 0.0),
+            intensity: Vec3A::ONE
+        }
+    );
+    match &s.lights[1] {
+        Light::Area(a) => {
+            // The original report's 32 shadow rays.
+            assert_eq!(a.samples, 32);
+            assert_eq!(a.radiance, Vec3A::ONE);
+        }
+        l => panic!("{l:?}"),
+    }
+    assert!(s.objects.is_empty());
+}
+
+#[test]
+fn sub_table_defaults_and_numbers_as_integers() {
+    let s = parse(
+        r#"
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.m.mirror]
+[materials.g.dielectric]
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+material = "m"
+"#,
+    );
+    let g = &s.materials[0];
+    assert_eq!(g.dielectric.unwrap().ior, 1.5);
+    assert_eq!(g.dielectric.unwrap().tint, Vec3A::ONE);
+    let m = &s.materials[1];
+    assert_eq!(m.mirror.unwrap().reflectivity, 1.0);
+    assert_eq!(m.mirror.unwrap().tint, Vec3A::ONE);
+    assert_eq!(s.objects[0].material, 1);
+}
+
+#[test]
+fn shipped_test_scenes_load() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                !scene.objects.is_empty() && !scene.lights.is_empty(),
+                "{}",
+                path.display()
+            );
+            assert!(scene.meshes.is_empty(), "test scenes use analytic shapes only");
+            count += 1;
+        }
+    }
+    assert!(count >= 3, "{count} scenes in {}", dir.display());
+}
+
+#[test]
+fn shipped_scenes_have_what_their_tests_need() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test");
+    let mirror = load_scene(&dir.join("mirror.toml")).unwrap();
+    assert!(mirror
+        .materials
+        .iter()
+        .any(|m| m.mirror.is_some_and(|m| m.reflectivity > 0.5)));
+    let shadow = load_scene(&dir.join("shadow.toml")).unwrap();
+    match &shadow.lights[0] {
+        Light::Area(a) => assert!(a.normal.y < -0.99, "the light must face the floor"),
+        l => panic!("{l:?}"),
+    }
+    let spheres = load_scene(&dir.join("spheres.toml")).unwrap();
+    assert!(matches!(spheres.lights[0], Light::Point { .. }));
+    assert_eq!(
+        spheres
+            .objects
+            .iter()
+            .filter(|o| matches!(o.shape, Shape::Sphere(_)))
+            .count(),
+        3
+    );
+}
+
+#[test]
+fn scene_bounds_cover_the_objects() {
+    let s = parse(EVERY_KEY);
+    let b = s.bounds();
+    // The wall (centre y = 1, 6 high along y) spans y ∈ [−2, 4].
+    assert!((b.min.y + 2.0).abs() < 1e-5 && (b.max.y - 4.0).abs() < 1e-5, "{b:?}");
+}
