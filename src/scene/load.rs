@@ -307,7 +307,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         };
         objects.push(Object { name, shape, material });
     }
-    let meshes = ctx.load_meshes(&desc.objects, &mut objects, &mesh_refs)?;
+    let meshes = ctx.load_meshes(&mut objects, &mesh_refs)?;
     Ok(Scene {
         settings,
         camera,
@@ -876,7 +876,6 @@ impl Ctx<'_> {
     /// and points the objects at them.
     fn load_meshes(
         &self,
-        descs: &[ObjectDesc],
         objects: &mut [Object],
         refs: &[(usize, &Spanned<String>)],
     ) -> Result<Vec<Arc<Mesh>>, SceneError> {
@@ -884,7 +883,7 @@ impl Ctx<'_> {
         let mesh_error = |object: usize, file: &Spanned<String>, error| SceneError::Mesh {
             path: self.path.into(),
             place: self.place(file.span()),
-            object: objects_name(descs, object),
+            object: objects[object].name.clone(),
             error,
         };
         // Distinct files in order of first use; `first_user` reports errors
@@ -920,13 +919,6 @@ impl Ctx<'_> {
         }
         Ok(meshes)
     }
-}
-
-fn objects_name(descs: &[ObjectDesc], i: usize) -> String {
-    descs[i]
-        .name
-        .clone()
-        .unwrap_or_else(|| format!("{}#{i}", kind_name(*descs[i].kind.get_ref())))
 }
 
 /// Rotation by `deg` degrees about x, then y, then z (the convention of
