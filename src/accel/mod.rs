@@ -6,6 +6,8 @@
 //! `brute` tests everything and is the oracle of the tests.
 
 pub mod brute;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod kdtree;
 pub mod triangle;
 
@@ -138,6 +140,9 @@ pub fn build(scene: &Scene, kind: AccelKind, options: &AccelOptions) -> Result<B
     match kind {
         AccelKind::Brute => Ok(Box::new(brute::BruteForce::new(scene, options.triangle_test))),
         AccelKind::KdTree => Ok(Box::new(kdtree::KdTreeAccel::build(scene, options))),
+        #[cfg(feature = "embree")]
+        AccelKind::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene, options)?)),
+        #[cfg(not(feature = "embree"))]
         AccelKind::Embree => Err(AccelError::Unavailable("embree")),
     }
 }

@@ -1,0 +1,214 @@
+//! Test scenes built in code for the Embree tests: an icosphere instanced
+//! several times with rotations and scales, a random triangle soup, spheres
+//! and quads, plus seeded ray generators.
+#![allow(dead_code)]
+
+use caustic::math::rng::{Domain, Rng};
+use caustic::math::{Ray, Transform, Vec3, Vec3A};
+use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
+use std::sync::Arc;
+
+/// Icosahedron subdivided `levels` times, vertices on the unit sphere.
+pub fn icosphere(levels: u32) -> Mesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut p: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut cache = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
+            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
+                (p.len() - 1) as u32
+            })
+        };
+        let mut next = Vec::with_capacity(f.len() * 4);
+        for [a, b, c] in f {
+            let ab = mid(a, b, &mut p);
+            let bc = mid(b, c, &mut p);
+            let ca = mid(c, a, &mut p);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = next;
+    }
+    Mesh::new(format!("icosphere{levels}"), p, f, None).unwrap()
+}
+
+/// `n` random triangles in the box [-1, 1]³ (overlapping, of all shapes).
+pub fn soup(n: usize, seed: u64) -> Mesh {
+    let mut rng = Rng::new(seed, Domain::Analysis, 77, 0);
+    let mut p = Vec::new();
+    let mut f = Vec::new();
+    for i in 0..n {
+        let c = Vec3::new(rng.f32() * 2.0 - 1.0, rng.f32() * 2.0 - 1.0, rng.f32() * 2.0 - 1.0);
+        for _ in 0..3 {
+            let d = Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * 0.6;
+            p.push(c + d);
+        }
+        let b = 3 * i as u32;
+        f.push([b, b + 1, b + 2]);
+    }
+    Mesh::new("soup", p, f, None).unwrap()
+}
+
+fn object(name: &str, shape: Shape) -> Object {
+    Object {
+        name: name.into(),
+        shape,
+        material: 0,
+    }
+}
+
+/// The cross-check scene: a floor and a back wall (quads), three spheres,
+/// six rotated, scaled and translated instances of one icosphere (one BLAS),
+/// and a soup (a second BLAS) used twice.
+pub fn test_scene() -> Scene {
+    let ico = Arc::new(icosphere(1));
+    let soup = Arc::new(soup(200, 5));
+    let mut objects = vec![
+        object(
+            "floor",
+            Shape::Quad(
+                Quad::new(
+                    Vec3A::new(-6.0, -1.5, -6.0),
+                    Vec3A::new(0.0, 0.0, 12.0),
+                    Vec3A::new(12.0, 0.0, 0.0),
+                )
+                .unwrap(),
+            ),
+        ),
+        object(
+            "wall",
+            Shape::Quad(
+                Quad::new(
+                    Vec3A::new(-6.0, -1.5, -6.0),
+                    Vec3A::new(12.0, 0.0, 0.0),
+                    Vec3A::new(0.0, 8.0, 0.5),
+                )
+                .unwrap(),
+            ),
+        ),
+        object(
+            "sphere a",
+            Shape::Sphere(Sphere {
+                center: Vec3A::new(2.5, 0.0, 1.0),
+                radius: 1.0,
+            }),
+        ),
+        object(
+            "sphere b",
+            Shape::Sphere(Sphere {
+                center: Vec3A::new(-2.0, 1.5, -2.0),
+                radius: 0.6,
+            }),
+        ),
+        object(
+            "sphere small",
+            Shape::Sphere(Sphere {
+                center: Vec3A::new(0.5, 3.0, 2.0),
+                radius: 0.05,
+            }),
+        ),
+    ];
+    for k in 0..6 {
+        let fk = k as f32;
+        let transform = Transform::from_srt(
+            Vec3::new(0.5 + 0.1 * fk, 0.7, 0.5 + 0.05 * fk),
+            Vec3::new(17.0 * fk, 33.0 * fk + 5.0, 9.0 * fk),
+            Vec3::new(-3.0 + 1.3 * fk, 0.2 * fk, 2.5 - 0.9 * fk),
+        )
+        .unwrap();
+        objects.push(object(
+            &format!("ico {k}"),
+            Shape::Mesh {
+                mesh: 0,
+                transform,
+                smooth: true,
+            },
+        ));
+    }
+    for (k, offset) in [Vec3::new(0.0, 1.0, 0.0), Vec3::new(3.0, 2.5, -3.0)]
+        .into_iter()
+        .enumerate()
+    {
+        objects.push(object(
+            &format!("soup {k}"),
+            Shape::Mesh {
+                mesh: 1,
+                transform: Transform::from_srt(Vec3::ONE, Vec3::new(0.0, 40.0 * k as f32, 0.0), offset).unwrap(),
+                smooth: false,
+            },
+        ));
+    }
+    Scene {
+        settings: RenderSettings::default(),
+        camera: Camera::new(Vec3A::new(0.0, 1.0, 9.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
+        materials: vec![Material::diffuse("grey", Vec3A::splat(0.5))],
+        lights: vec![],
+        meshes: vec![ico, soup],
+        objects,
+    }
+}
+
+/// Unit vector uniform on the sphere.
+pub fn uniform_dir(rng: &mut Rng) -> Vec3A {
+    let z = rng.f32() * 2.0 - 1.0;
+    let phi = rng.f32() * std::f32::consts::TAU;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Ray `i` of a seeded set: half start anywhere in the (enlarged) scene
+/// bounds with a uniform direction, half are aimed at a random point of a
+/// random object so that most of them hit something.
+pub fn ray(scene: &Scene, seed: u64, i: u64) -> Ray {
+    let mut rng = Rng::new(seed, Domain::Analysis, i, 1);
+    let b = scene.bounds();
+    let lo = b.min - b.extent() * 0.2;
+    let ext = b.extent() * 1.4;
+    let origin = lo + ext * Vec3A::new(rng.f32(), rng.f32(), rng.f32());
+    if i % 2 == 0 {
+        return Ray::new(origin, uniform_dir(&mut rng));
+    }
+    let k = rng.below(scene.objects.len() as u32) as usize;
+    let ob = scene.object_bounds(k);
+    let target = ob.min + ob.extent() * Vec3A::new(rng.f32(), rng.f32(), rng.f32());
+    let dir = (target - origin).normalize_or(Vec3A::Z);
+    Ray::new(origin, dir)
+}
