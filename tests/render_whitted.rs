@@ -411,3 +411,53 @@ fn progress_reports_every_pixel() {
     assert_eq!(calls.len(), 4);
     assert_eq!(*calls.last().unwrap(), (64 * 48, 64 * 48));
 }
+
+/// The same scene at scale `s` (lengths × s, point intensities × s² so the
+/// radiance is unchanged): floor, occluding sphere, mirror sphere.
+fn scaled_scene(s: f32) -> Scene {
+    let mirror = Material {
+        mirror: Some(Mirror {
+            reflectivity: 0.7,
+            tint: Vec3A::ONE,
+        }),
+        ..Material::diffuse("mirror", Vec3A::splat(0.3))
+    };
+    Scene {
+        settings: settings(48, 48, 1),
+        camera: camera([0.0, 3.0 * s, 3.0 * s], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0),
+        materials: vec![Material::diffuse("floor", albedo()), mirror],
+        lights: vec![Light::Point {
+            position: Vec3A::new(0.3 * s, 3.0 * s, 0.2 * s),
+            intensity: Vec3A::splat(10.0 * s * s),
+        }],
+        meshes: vec![],
+        objects: vec![
+            floor(5.0 * s, 0),
+            sphere([0.0, 0.5 * s, 0.0], 0.5 * s, 0),
+            sphere([1.2 * s, 0.4 * s, 0.6 * s], 0.4 * s, 1),
+        ],
+    }
+}
+
+#[test]
+fn no_acne_or_leaks_from_1e_minus_4_to_1e5_units() {
+    let reference = render_scene(&scaled_scene(1.0)).film;
+    for s in [1.0e-4f32, 1.0e5] {
+        let film = render_scene(&scaled_scene(s)).film;
+        // Self-shadowing (acne) would darken pixels, leaking would brighten
+        // the shadow: allow only rounding-level differences, on a handful of
+        // pixels at most (silhouette pixels may flip).
+        let differing = film
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * b.max_element().max(1e-3))
+            .count();
+        assert!(differing <= 10, "scale {s}: {differing} pixels differ");
+        assert!(rel_err(film.mean(), reference.mean()) < 2e-3, "scale {s}");
+    }
+    // The sphere's lower half is shadowed by itself, the floor is in its
+    // shadow, and both are exactly black (no ambient): light does not leak.
+    let scene = scaled_scene(1.0);
+    assert_eq!(pixel_at(&scene, &reference, Vec3A::new(-0.25, 0.0, 0.35)), Vec3::ZERO);
+}

@@ -249,3 +249,121 @@ impl fmt::Display for RenderPlan {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3A;
+    use crate::scene::{AreaLight, Camera, Material, Mirror, Object, RenderSettings, Shape, Sphere};
+
+    fn scene(spp: u32, sharing: SampleSharing, mirror_used: bool) -> Scene {
+        let mirror = Material {
+            mirror: Some(Mirror {
+                reflectivity: 1.0,
+                tint: Vec3A::ONE,
+            }),
+            ..Material::diffuse("mirror", Vec3A::ONE)
+        };
+        let ball = |material| Object {
+            name: "ball".into(),
+            shape: Shape::Sphere(Sphere {
+                center: Vec3A::ZERO,
+                radius: 1.0,
+            }),
+            material,
+        };
+        Scene {
+            settings: RenderSettings {
+                spp,
+                sharing,
+                ..Default::default()
+            },
+            camera: Camera::new(Vec3A::Z * 5.0, Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
+            materials: vec![Material::diffuse("white", Vec3A::ONE), mirror],
+            lights: vec![
+                Light::Point {
+                    position: Vec3A::Y * 3.0,
+                    intensity: Vec3A::ONE,
+                },
+                Light::Area(AreaLight::new(Vec3A::Y * 3.0, Vec3A::X, Vec3A::Z, Vec3A::ONE, 32).unwrap()),
+            ],
+            meshes: vec![],
+            objects: vec![ball(0), ball(if mirror_used { 1 } else { 0 })],
+        }
+    }
+
+    #[test]
+    fn point_lights_get_one_ray_and_area_lights_their_strata() {
+        let plan = RenderPlan::new(&scene(1, SampleSharing::Spread, true));
+        assert_eq!(plan.sharing, Sharing::SplitSingleSample);
+        assert_eq!(plan.lights[0].shadow, ShadowSampling::Hard);
+        assert_eq!(
+            plan.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                grid: (4, 8),
+                rays_per_sample: 32
+            }
+        );
+        let spread = RenderPlan::new(&scene(4, SampleSharing::Spread, true));
+        assert!(spread.spread());
+        assert_eq!(
+            spread.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                grid: (4, 8),
+                rays_per_sample: 8
+            }
+        );
+        // More samples than strata: refined to one stratum per sample.
+        let many = RenderPlan::new(&scene(64, SampleSharing::Spread, true));
+        assert!(matches!(
+            many.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 64,
+                rays_per_sample: 1,
+                ..
+            }
+        ));
+        let split = RenderPlan::new(&scene(4, SampleSharing::Split, true));
+        assert_eq!(split.sharing, Sharing::SplitRequested);
+        assert!(matches!(
+            split.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                rays_per_sample: 32,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn secondary_rays_only_for_used_specular_materials() {
+        let with = RenderPlan::new(&scene(1, SampleSharing::Split, true));
+        assert!(with.traces_secondary());
+        assert!(with
+            .to_string()
+            .contains("secondary rays: ran, 1 mirror/glass object(s)"));
+        // The mirror material exists but no object uses it.
+        let without = RenderPlan::new(&scene(1, SampleSharing::Split, false));
+        assert_eq!(without.secondary, Secondary::NoSpecularObject);
+        let text = without.to_string();
+        assert!(
+            text.contains("secondary rays: skipped (no mirror or dielectric object)"),
+            "{text}"
+        );
+        assert!(
+            text.contains("light 0 (point): ran, hard shadow, 1 shadow ray"),
+            "{text}"
+        );
+        assert!(text.contains("ambient term: skipped"), "{text}");
+        assert!(text.contains("sample spreading: skipped (1 sample per pixel"), "{text}");
+        let mut s = scene(4, SampleSharing::Spread, true);
+        s.settings.max_depth = 0;
+        let flat = RenderPlan::new(&s);
+        assert_eq!(flat.secondary, Secondary::DepthZero);
+        assert!(flat.to_string().contains("spread over 4 samples, at most 8 per sample"));
+        s.lights.clear();
+        assert!(RenderPlan::new(&s).to_string().contains("skipped (no lights)"));
+    }
+}

@@ -15,6 +15,18 @@
 //!
 //! Spawned rays start at `offset_ray_origin` (error-bound offsets, no fixed
 //! epsilon); shadow rays stop a relative `SHADOW_EPSILON` short of the light.
+//!
+//! Conventions worth knowing:
+//! - Lights are not scene objects. Camera and specular rays test the area
+//!   lights' rectangles analytically (emitting side only: seen from behind a
+//!   light is transparent); shadow rays only query the accelerator, so no
+//!   light ever occludes another, or itself.
+//! - Shadow rays treat every object as opaque, glass included (classic
+//!   Whitted): light focused through glass is the photon pass's job.
+//! - Beyond `max_depth` bounces the reflected / refracted term is black.
+//! - Dielectrics have no diffuse or ambient term; they keep the specular
+//!   highlight of point lights only (a reflected ray never finds a point
+//!   light, while area lights show up in the reflection itself).
 
 use super::plan::{RenderPlan, ShadowSampling};
 use crate::accel::Accel;
