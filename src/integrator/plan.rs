@@ -1,0 +1,369 @@
+//! The render plan: what a scene needs, decided once before rendering, so
+//! that nothing runs that the scene cannot use (a point light gets one shadow
+//! ray, a scene without mirrors or glass spawns no secondary rays, sample
+//! spreading only when there are several samples to spread over).
+//!
+//! Later passes (photon map, fog) become further fields here, each with its
+//! own "ran / skipped because ..." line in the `Display` output.
+
+use crate::scene::{Light, SampleSharing, Scene};
+use std::fmt;
+
+/// How the shadow rays of one light are cast.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowSampling {
+    /// Point light: one shadow ray per shading point (hard shadow).
+    Hard,
+    /// Area light: stratified jittered shadow rays over the rectangle.
+    Stratified {
+        /// Number of strata of the rectangle (`grid.0 × grid.1`). With
+        /// split sampling every camera sample casts them all; with spread
+        /// sampling they are shared out between the pixel's samples.
+        strata: u32,
+        /// Stratum grid from `math::sampling::grid_for(strata)`.
+        grid: (u32, u32),
+        /// Most shadow rays one camera sample casts toward this light.
+        rays_per_sample: u32,
+    },
+}
+
+/// The plan for one light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightPlan {
+    /// Index in `Scene::lights`.
+    pub index: usize,
+    /// Shadow sampling.
+    pub shadow: ShadowSampling,
+}
+
+/// Why samples do or do not share secondary work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sharing {
+    /// Spread: sample `k` of a pixel takes its own share of the area lights'
+    /// strata and one Fresnel-weighted branch at dielectrics.
+    Spread,
+    /// Split because the settings ask for it.
+    SplitRequested,
+    /// Split because there is only one sample per pixel.
+    SplitSingleSample,
+}
+
+/// Secondary (reflected / refracted) rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Secondary {
+    /// Traced, up to `max_depth` bounces.
+    Traced {
+        /// Objects with a mirror or dielectric material.
+        specular_objects: usize,
+        /// Of which dielectric.
+        dielectric_objects: usize,
+    },
+    /// No object uses a mirror or dielectric material.
+    NoSpecularObject,
+    /// Specular objects exist but `max_depth = 0`.
+    DepthZero,
+}
+
+/// What a render will do, computed from the scene by [`RenderPlan::new`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderPlan {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Camera samples per pixel.
+    pub spp: u32,
+    /// Specular bounce limit.
+    pub max_depth: u32,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Ambient term active (scene ambient light is not black).
+    pub ambient: bool,
+    /// One entry per light, in scene order.
+    pub lights: Vec<LightPlan>,
+    /// Secondary rays.
+    pub secondary: Secondary,
+    /// Sample sharing.
+    pub sharing: Sharing,
+}
+
+impl RenderPlan {
+    /// Decides what runs for `scene`.
+    pub fn new(scene: &Scene) -> RenderPlan {
+        let s = &scene.settings;
+        let spp = s.spp.max(1);
+        let sharing = if spp == 1 {
+            Sharing::SplitSingleSample
+        } else if s.sharing == SampleSharing::Split {
+            Sharing::SplitRequested
+        } else {
+            Sharing::Spread
+        };
+        let spread = sharing == Sharing::Spread;
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(index, light)| {
+                let shadow = match light {
+                    Light::Point { .. } => ShadowSampling::Hard,
+                    Light::Area(a) => {
+                        let n = a.samples.max(1);
+                        // Spreading needs at least one stratum per sample:
+                        // with fewer strata than samples the grid is refined
+                        // to `spp` strata (one shadow ray per sample).
+                        let strata = if spread { n.max(spp) } else { n };
+                        let rays_per_sample = if spread { strata.div_ceil(spp) } else { strata };
+                        ShadowSampling::Stratified {
+                            strata,
+                            grid: crate::math::sampling::grid_for(strata),
+                            rays_per_sample,
+                        }
+                    }
+                };
+                LightPlan { index, shadow }
+            })
+            .collect();
+        let mut specular_objects = 0;
+        let mut dielectric_objects = 0;
+        for o in &scene.objects {
+            let m = &scene.materials[o.material as usize];
+            if m.is_specular() {
+                specular_objects += 1;
+            }
+            if m.dielectric.is_some() {
+                dielectric_objects += 1;
+            }
+        }
+        let secondary = if specular_objects == 0 {
+            Secondary::NoSpecularObject
+        } else if s.max_depth == 0 {
+            Secondary::DepthZero
+        } else {
+            Secondary::Traced {
+                specular_objects,
+                dielectric_objects,
+            }
+        };
+        RenderPlan {
+            width: s.width,
+            height: s.height,
+            spp,
+            max_depth: s.max_depth,
+            seed: s.seed,
+            ambient: s.ambient.max_element() > 0.0,
+            lights,
+            secondary,
+            sharing,
+        }
+    }
+
+    /// True when samples spread shadow strata and dielectric branches.
+    pub fn spread(&self) -> bool {
+        self.sharing == Sharing::Spread
+    }
+
+    /// True when reflected / refracted rays are traced.
+    pub fn traces_secondary(&self) -> bool {
+        matches!(self.secondary, Secondary::Traced { .. })
+    }
+}
+
+impl fmt::Display for RenderPlan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let pixels = self.width as u64 * self.height as u64;
+        writeln!(f, "render plan:")?;
+        writeln!(
+            f,
+            "  camera rays: ran, {}x{} pixels x {} spp = {} rays (seed {})",
+            self.width,
+            self.height,
+            self.spp,
+            pixels * self.spp as u64,
+            self.seed
+        )?;
+        if self.ambient {
+            writeln!(f, "  ambient term: ran")?;
+        } else {
+            writeln!(f, "  ambient term: skipped (scene ambient light is black)")?;
+        }
+        if self.lights.is_empty() {
+            writeln!(f, "  direct light and shadow rays: skipped (no lights)")?;
+        }
+        for l in &self.lights {
+            match l.shadow {
+                ShadowSampling::Hard => writeln!(
+                    f,
+                    "  light {} (point): ran, hard shadow, 1 shadow ray per shading point",
+                    l.index
+                )?,
+                ShadowSampling::Stratified {
+                    strata,
+                    grid,
+                    rays_per_sample,
+                } => {
+                    if self.spread() {
+                        writeln!(
+                            f,
+                            "  light {} (area): ran, soft shadow, {strata} stratified jittered shadow rays \
+                             per pixel ({}x{} strata) spread over {} samples, at most {rays_per_sample} per sample",
+                            l.index, grid.0, grid.1, self.spp
+                        )?
+                    } else {
+                        writeln!(
+                            f,
+                            "  light {} (area): ran, soft shadow, {strata} stratified jittered shadow rays \
+                             per shading point ({}x{} strata)",
+                            l.index, grid.0, grid.1
+                        )?
+                    }
+                }
+            }
+        }
+        match self.secondary {
+            Secondary::Traced {
+                specular_objects,
+                dielectric_objects,
+            } => writeln!(
+                f,
+                "  secondary rays: ran, {specular_objects} mirror/glass object(s) \
+                 ({dielectric_objects} refracting), depth limit {}",
+                self.max_depth
+            )?,
+            Secondary::NoSpecularObject => writeln!(f, "  secondary rays: skipped (no mirror or dielectric object)")?,
+            Secondary::DepthZero => writeln!(f, "  secondary rays: skipped (max depth is 0)")?,
+        }
+        match self.sharing {
+            Sharing::Spread => writeln!(
+                f,
+                "  sample spreading: ran (area-light strata shared out over the pixel's samples; \
+                 one Fresnel-weighted branch per sample at dielectrics)"
+            ),
+            Sharing::SplitRequested => writeln!(
+                f,
+                "  sample spreading: skipped (sharing = split: every sample casts all shadow rays and follows both branches)"
+            ),
+            Sharing::SplitSingleSample => {
+                writeln!(f, "  sample spreading: skipped (1 sample per pixel: full splitting)")
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3A;
+    use crate::scene::{AreaLight, Camera, Material, Mirror, Object, RenderSettings, Shape, Sphere};
+
+    fn scene(spp: u32, sharing: SampleSharing, mirror_used: bool) -> Scene {
+        let mirror = Material {
+            mirror: Some(Mirror {
+                reflectivity: 1.0,
+                tint: Vec3A::ONE,
+            }),
+            ..Material::diffuse("mirror", Vec3A::ONE)
+        };
+        let ball = |material| Object {
+            name: "ball".into(),
+            shape: Shape::Sphere(Sphere {
+                center: Vec3A::ZERO,
+                radius: 1.0,
+            }),
+            material,
+        };
+        Scene {
+            settings: RenderSettings {
+                spp,
+                sharing,
+                ..Default::default()
+            },
+            camera: Camera::new(Vec3A::Z * 5.0, Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
+            materials: vec![Material::diffuse("white", Vec3A::ONE), mirror],
+            lights: vec![
+                Light::Point {
+                    position: Vec3A::Y * 3.0,
+                    intensity: Vec3A::ONE,
+                },
+                Light::Area(AreaLight::new(Vec3A::Y * 3.0, Vec3A::X, Vec3A::Z, Vec3A::ONE, 32).unwrap()),
+            ],
+            meshes: vec![],
+            objects: vec![ball(0), ball(if mirror_used { 1 } else { 0 })],
+        }
+    }
+
+    #[test]
+    fn point_lights_get_one_ray_and_area_lights_their_strata() {
+        let plan = RenderPlan::new(&scene(1, SampleSharing::Spread, true));
+        assert_eq!(plan.sharing, Sharing::SplitSingleSample);
+        assert_eq!(plan.lights[0].shadow, ShadowSampling::Hard);
+        assert_eq!(
+            plan.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                grid: (4, 8),
+                rays_per_sample: 32
+            }
+        );
+        let spread = RenderPlan::new(&scene(4, SampleSharing::Spread, true));
+        assert!(spread.spread());
+        assert_eq!(
+            spread.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                grid: (4, 8),
+                rays_per_sample: 8
+            }
+        );
+        // More samples than strata: refined to one stratum per sample.
+        let many = RenderPlan::new(&scene(64, SampleSharing::Spread, true));
+        assert!(matches!(
+            many.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 64,
+                rays_per_sample: 1,
+                ..
+            }
+        ));
+        let split = RenderPlan::new(&scene(4, SampleSharing::Split, true));
+        assert_eq!(split.sharing, Sharing::SplitRequested);
+        assert!(matches!(
+            split.lights[1].shadow,
+            ShadowSampling::Stratified {
+                strata: 32,
+                rays_per_sample: 32,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn secondary_rays_only_for_used_specular_materials() {
+        let with = RenderPlan::new(&scene(1, SampleSharing::Split, true));
+        assert!(with.traces_secondary());
+        assert!(with
+            .to_string()
+            .contains("secondary rays: ran, 1 mirror/glass object(s)"));
+        // The mirror material exists but no object uses it.
+        let without = RenderPlan::new(&scene(1, SampleSharing::Split, false));
+        assert_eq!(without.secondary, Secondary::NoSpecularObject);
+        let text = without.to_string();
+        assert!(
+            text.contains("secondary rays: skipped (no mirror or dielectric object)"),
+            "{text}"
+        );
+        assert!(
+            text.contains("light 0 (point): ran, hard shadow, 1 shadow ray"),
+            "{text}"
+        );
+        assert!(text.contains("ambient term: skipped"), "{text}");
+        assert!(text.contains("sample spreading: skipped (1 sample per pixel"), "{text}");
+        let mut s = scene(4, SampleSharing::Spread, true);
+        s.settings.max_depth = 0;
+        let flat = RenderPlan::new(&s);
+        assert_eq!(flat.secondary, Secondary::DepthZero);
+        assert!(flat.to_string().contains("spread over 4 samples, at most 8 per sample"));
+        s.lights.clear();
+        assert!(RenderPlan::new(&s).to_string().contains("skipped (no lights)"));
+    }
+}

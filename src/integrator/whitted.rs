@@ -1,0 +1,498 @@
+//! Whitted ray tracing (Whitted 1980) with physically based lights:
+//! ambient + Lambert diffuse + a Phong or Blinn-Phong highlight per light,
+//! hard shadows for point lights, stratified soft shadows for area lights,
+//! mirror reflection, and Fresnel-weighted reflection/refraction at dielectrics.
+//!
+//! Units. A point light of intensity `I` gives irradiance `E = I cos θ / r²`;
+//! an area light of radiance `L` and area `A`, sampled at N stratified points
+//! `x_k`, gives `E ≈ (1/N) Σ_k L cos θ_k cos θ'_k A / r_k²` (visibility
+//! included). Outgoing radiance is `f(ωi, ωo) · E` summed over lights, with
+//! the energy-normalised BRDF
+//! `f = kd/π + ks · (n+2)/(2π) · (R·V)^n` (Phong; Lafortune & Willems 1994)
+//! or `f = kd/π + ks · (n+8)/(8π) · (N·H)^n` (Blinn-Phong; the normalisation
+//! of Akenine-Möller et al., *Real-Time Rendering*, §7.7), so a white lobe
+//! reflects at most (about) the incident energy whatever the exponent.
+//!
+//! Spawned rays start at `offset_ray_origin` (error-bound offsets, no fixed
+//! epsilon); shadow rays stop a relative `SHADOW_EPSILON` short of the light.
+//!
+//! Conventions worth knowing:
+//! - Lights are not scene objects. Camera and specular rays test the area
+//!   lights' rectangles analytically (emitting side only: seen from behind a
+//!   light is transparent); shadow rays only query the accelerator, so no
+//!   light ever occludes another, or itself.
+//! - Shadow rays treat every object as opaque, glass included (classic
+//!   Whitted): light focused through glass is the photon pass's job.
+//! - Beyond `max_depth` bounces the reflected / refracted term is black.
+//! - Dielectrics have no diffuse or ambient term; they keep the specular
+//!   highlight of point lights only (a reflected ray never finds a point
+//!   light, while area lights show up in the reflection itself).
+
+use super::plan::{RenderPlan, ShadowSampling};
+use crate::accel::Accel;
+use crate::math::sampling::stratified;
+use crate::math::{offset_ray_origin, Ray, Rng, Vec2, Vec3A};
+use crate::scene::{Dielectric, Light, Material, Quad, Scene, ShadingModel, SurfaceInteraction};
+use std::f32::consts::PI;
+use std::ops::AddAssign;
+
+/// A shadow ray toward a light sample at distance `d` is tested on
+/// `t < d (1 − SHADOW_EPSILON)`: relative, so it is right at every scene
+/// scale, and it keeps geometry coplanar with an area light (a ceiling the
+/// light is flush with) from occluding it (pbrt's `ShadowEpsilon`).
+pub const SHADOW_EPSILON: f32 = 1.0e-4;
+
+/// Rays cast, by kind. Counted per tile and summed at the end (no atomics
+/// per ray).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Primary rays from the camera.
+    pub camera: u64,
+    /// Shadow (occlusion) rays.
+    pub shadow: u64,
+    /// Reflected and refracted rays.
+    pub secondary: u64,
+}
+
+impl RayCounts {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.camera + self.shadow + self.secondary
+    }
+}
+
+impl AddAssign for RayCounts {
+    fn add_assign(&mut self, o: RayCounts) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+        self.secondary += o.secondary;
+    }
+}
+
+/// Per-sample state threaded through the recursion.
+pub struct SampleContext<'c> {
+    /// The sample's own random stream.
+    pub rng: Rng,
+    /// With spread sampling, which share `slot ∈ [0, spp)` of the area
+    /// lights' strata this sample takes. Ignored when splitting.
+    pub slot: u32,
+    /// Ray counters of the current tile.
+    pub counts: &'c mut RayCounts,
+}
+
+/// Mirror direction of `d` about the unit normal `n`: `d − 2(d·n)n`.
+#[inline]
+pub fn reflect(d: Vec3A, n: Vec3A) -> Vec3A {
+    d - n * (2.0 * d.dot(n))
+}
+
+/// Snell refraction of the unit direction `d` through a surface with unit
+/// normal `n` facing the incident side (`d·n ≤ 0`), with `eta = n1/n2`.
+/// Returns the refracted unit direction and `(cos θi, cos θt)`, or `None` on
+/// total internal reflection (`sin² θt = eta² (1 − cos² θi) ≥ 1`).
+#[inline]
+pub fn refract(d: Vec3A, n: Vec3A, eta: f32) -> Option<(Vec3A, f32, f32)> {
+    let cos_i = (-d.dot(n)).clamp(0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let t = d * eta + n * (eta * cos_i - cos_t);
+    Some((t.normalize(), cos_i, cos_t))
+}
+
+/// Schlick's approximation of the Fresnel reflectance from medium `n1` into
+/// `n2`: `R = R0 + (1 − R0)(1 − cos θ)^5`, `R0 = ((n1 − n2)/(n1 + n2))²`.
+/// From the denser medium (`n1 > n2`) the angle is the transmitted one,
+/// `θt` (Schlick 1994; pbrt §8.2): with `θi` the curve would not reach 1 at
+/// the critical angle. Total internal reflection must be handled before.
+#[inline]
+pub fn fresnel_schlick(n1: f32, n2: f32, cos_i: f32, cos_t: f32) -> f32 {
+    let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
+    let c = if n1 > n2 { cos_t } else { cos_i };
+    let m = (1.0 - c).clamp(0.0, 1.0);
+    r0 + (1.0 - r0) * m * m * m * m * m
+}
+
+/// The Whitted integrator over one scene and accelerator.
+pub struct Whitted<'a> {
+    scene: &'a Scene,
+    accel: &'a dyn Accel,
+    plan: &'a RenderPlan,
+    /// Area lights as rectangles, tested analytically by camera and specular
+    /// rays (lights are not scene objects, so shadow rays never hit them).
+    emitters: Vec<(Quad, Vec3A)>,
+}
+
+impl<'a> Whitted<'a> {
+    /// Prepares the integrator.
+    pub fn new(scene: &'a Scene, accel: &'a dyn Accel, plan: &'a RenderPlan) -> Self {
+        let emitters = scene
+            .lights
+            .iter()
+            .filter_map(|l| match l {
+                Light::Area(a) => Quad::new(a.center - (a.u + a.v) * 0.5, a.u, a.v).map(|q| (q, a.radiance)),
+                Light::Point { .. } => None,
+            })
+            .collect();
+        Self {
+            scene,
+            accel,
+            plan,
+            emitters,
+        }
+    }
+
+    /// Radiance arriving along `ray` (toward its origin) after `depth`
+    /// specular bounces.
+    pub fn radiance(&self, ray: &Ray, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        let hit = self.accel.intersect(ray, f32::INFINITY);
+        // A visible area light nearer than the surface: its emitting side
+        // returns its radiance; seen from behind it is not there.
+        let mut t_nearest = hit.map_or(f32::INFINITY, |h| h.t);
+        let mut emitted = None;
+        for (quad, radiance) in &self.emitters {
+            if ray.dir.dot(quad.normal) < 0.0 {
+                if let Some((t, _, _)) = quad.intersect(ray, t_nearest) {
+                    t_nearest = t;
+                    emitted = Some(*radiance);
+                }
+            }
+        }
+        if let Some(l) = emitted {
+            return l;
+        }
+        let Some(hit) = hit else {
+            return Vec3A::ZERO;
+        };
+        let si = self.scene.surface_interaction(ray, &hit);
+        let m = &self.scene.materials[si.material as usize];
+        if let Some(d) = m.dielectric {
+            return self.dielectric(ray, &si, m, d, depth, ctx);
+        }
+        let local = self.direct(ray, &si, m, false, ctx);
+        match m.mirror {
+            Some(mirror) if mirror.reflectivity > 0.0 => {
+                let r = mirror.reflectivity;
+                let reflected = if self.can_bounce(depth) {
+                    let (ng, ns) = facing(&si, -ray.dir);
+                    let mut dir = reflect(ray.dir, ns);
+                    if dir.dot(ng) <= 0.0 {
+                        // The shading normal would send the ray under the
+                        // surface: reflect about the geometric one instead.
+                        dir = reflect(ray.dir, ng);
+                    }
+                    self.trace_secondary(&si, dir, depth, ctx)
+                } else {
+                    Vec3A::ZERO // beyond the depth limit the reflection is black
+                };
+                local * (1.0 - r) + mirror.tint * reflected * r
+            }
+            _ => local,
+        }
+    }
+
+    fn can_bounce(&self, depth: u32) -> bool {
+        self.plan.traces_secondary() && depth < self.plan.max_depth
+    }
+
+    fn trace_secondary(&self, si: &SurfaceInteraction, dir: Vec3A, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        let dir = dir.normalize();
+        let origin = offset_ray_origin(si.p, si.p_error, si.ng, dir);
+        ctx.counts.secondary += 1;
+        self.radiance(&Ray::new(origin, dir), depth + 1, ctx)
+    }
+
+    /// Local shading: ambient and direct light from every light, with
+    /// shadow rays. `highlights_only` (dielectrics) keeps only the specular
+    /// lobe of point lights, the one light a reflected ray can never find
+    /// (area lights appear in the reflection itself).
+    fn direct(
+        &self,
+        ray: &Ray,
+        si: &SurfaceInteraction,
+        m: &Material,
+        highlights_only: bool,
+        ctx: &mut SampleContext,
+    ) -> Vec3A {
+        let wo = -ray.dir;
+        let (ng, ns) = facing(si, wo);
+        let mut out = if highlights_only || !self.plan.ambient {
+            Vec3A::ZERO
+        } else {
+            self.scene.settings.ambient * m.ambient
+        };
+        if highlights_only && m.specular.max_element() <= 0.0 {
+            return out;
+        }
+        for lp in &self.plan.lights {
+            match (&self.scene.lights[lp.index], lp.shadow) {
+                (Light::Point { position, intensity }, _) => {
+                    let to = *position - si.p;
+                    let d2 = to.length_squared();
+                    let wi = to / d2.sqrt();
+                    let cos = ns.dot(wi);
+                    // Light under the geometric surface, or behind the
+                    // shading normal: no contribution (and no shadow ray).
+                    if !d2.is_normal() || wi.dot(ng) <= 0.0 || cos <= 0.0 {
+                        continue;
+                    }
+                    if !self.unoccluded(si, *position, ctx) {
+                        continue;
+                    }
+                    let f = if highlights_only {
+                        specular_lobe(m, ns, wi, wo)
+                    } else {
+                        brdf(m, ns, wi, wo)
+                    };
+                    out += f * *intensity * (cos / d2);
+                }
+                (Light::Area(_), _) if highlights_only => {}
+                (
+                    Light::Area(a),
+                    ShadowSampling::Stratified {
+                        strata, grid: (nx, ny), ..
+                    },
+                ) => {
+                    // Which strata this sample evaluates and the weight of
+                    // each: all N with weight 1/N (split), or the strata
+                    // s ≡ slot (mod spp) with weight spp/N (spread: summed
+                    // over the pixel's samples, every stratum once, and the
+                    // pixel average is (1/N) Σ_s, the same estimator).
+                    let (first, step, weight) = if self.plan.spread() {
+                        (ctx.slot, self.plan.spp, self.plan.spp as f32 / strata as f32)
+                    } else {
+                        (0, 1, 1.0 / strata as f32)
+                    };
+                    let area = a.area();
+                    let mut sum = Vec3A::ZERO;
+                    let mut s = first;
+                    while s < strata {
+                        let (jx, jy) = ctx.rng.f32x2();
+                        let q = a.point(stratified(s, nx, ny, Vec2::new(jx, jy)));
+                        s += step;
+                        let to = q - si.p;
+                        let d2 = to.length_squared();
+                        let wi = to / d2.sqrt();
+                        let cos = ns.dot(wi);
+                        let cos_light = -wi.dot(a.normal); // one-sided emitter
+                        if !d2.is_normal() || cos_light <= 0.0 || wi.dot(ng) <= 0.0 || cos <= 0.0 {
+                            continue;
+                        }
+                        if !self.unoccluded(si, q, ctx) {
+                            continue;
+                        }
+                        sum += brdf(m, ns, wi, wo) * (cos * cos_light / d2);
+                    }
+                    out += sum * a.radiance * (area * weight);
+                }
+                (Light::Area(_), ShadowSampling::Hard) => {
+                    unreachable!("RenderPlan gives every area light stratified sampling")
+                }
+            }
+        }
+        out
+    }
+
+    /// Casts a shadow ray from the (offset) shading point toward `target`
+    /// and reports whether nothing blocks it before `target`.
+    fn unoccluded(&self, si: &SurfaceInteraction, target: Vec3A, ctx: &mut SampleContext) -> bool {
+        let origin = offset_ray_origin(si.p, si.p_error, si.ng, target - si.p);
+        let to = target - origin;
+        let dist = to.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return false;
+        }
+        ctx.counts.shadow += 1;
+        let ray = Ray::new(origin, to / dist);
+        !self.accel.occluded(&ray, dist * (1.0 - SHADOW_EPSILON))
+    }
+
+    /// A smooth dielectric interface (outside IOR 1, inside `d.ior`).
+    fn dielectric(
+        &self,
+        ray: &Ray,
+        si: &SurfaceInteraction,
+        m: &Material,
+        d: Dielectric,
+        depth: u32,
+        ctx: &mut SampleContext,
+    ) -> Vec3A {
+        let highlight = self.direct(ray, si, m, true, ctx);
+        if !self.can_bounce(depth) {
+            return highlight;
+        }
+        // Entering or leaving from the GEOMETRIC normal (outward for closed
+        // shapes): an interpolated normal can face the wrong way near
+        // silhouettes. Leaving: flip the normals and the IOR ratio.
+        let entering = ray.dir.dot(si.ng) < 0.0;
+        let (ng, ns, n1, n2) = if entering {
+            (si.ng, si.ns, 1.0, d.ior)
+        } else {
+            (-si.ng, -si.ns, d.ior, 1.0)
+        };
+        let eta = n1 / n2;
+        // Refract about the shading normal unless that sends the ray back to
+        // the incident side of the geometric surface.
+        let mut n = ns;
+        let mut refracted = refract(ray.dir, ns, eta);
+        if matches!(refracted, Some((t, _, _)) if t.dot(ng) >= 0.0) {
+            n = ng;
+            refracted = refract(ray.dir, ng, eta);
+        }
+        let mut reflected_dir = reflect(ray.dir, n);
+        if reflected_dir.dot(ng) <= 0.0 {
+            reflected_dir = reflect(ray.dir, ng);
+        }
+        let Some((refracted_dir, cos_i, cos_t)) = refracted else {
+            // Total internal reflection: all the light is reflected.
+            return highlight + self.trace_secondary(si, reflected_dir, depth, ctx);
+        };
+        let r = fresnel_schlick(n1, n2, cos_i, cos_t);
+        if self.plan.spread() {
+            // One branch, chosen with probability R / (1 − R) and divided by
+            // that probability: R·L_r / R and (1−R)·tint·L_t / (1−R).
+            if ctx.rng.f32() < r {
+                highlight + self.trace_secondary(si, reflected_dir, depth, ctx)
+            } else {
+                highlight + d.tint * self.trace_secondary(si, refracted_dir, depth, ctx)
+            }
+        } else {
+            let lr = self.trace_secondary(si, reflected_dir, depth, ctx);
+            let lt = self.trace_secondary(si, refracted_dir, depth, ctx);
+            highlight + lr * r + d.tint * lt * (1.0 - r)
+        }
+    }
+}
+
+/// Geometric and shading normals turned toward `wo` (the viewer), both by
+/// the geometric side so that they stay on the same side of the surface.
+#[inline]
+fn facing(si: &SurfaceInteraction, wo: Vec3A) -> (Vec3A, Vec3A) {
+    if si.ng.dot(wo) < 0.0 {
+        (-si.ng, -si.ns)
+    } else {
+        (si.ng, si.ns)
+    }
+}
+
+/// The normalised specular lobe (without the diffuse part), see the module docs.
+#[inline]
+fn specular_lobe(m: &Material, ns: Vec3A, wi: Vec3A, wo: Vec3A) -> Vec3A {
+    if m.specular.max_element() <= 0.0 {
+        return Vec3A::ZERO;
+    }
+    let n = m.shininess.max(0.0);
+    let lobe = match m.model {
+        ShadingModel::Phong => {
+            let r = reflect(-wi, ns);
+            (n + 2.0) / (2.0 * PI) * r.dot(wo).max(0.0).powf(n)
+        }
+        ShadingModel::BlinnPhong => {
+            let h = (wi + wo).normalize_or_zero();
+            (n + 8.0) / (8.0 * PI) * ns.dot(h).max(0.0).powf(n)
+        }
+    };
+    m.specular * lobe
+}
+
+/// Lambert + normalised Phong / Blinn-Phong BRDF.
+#[inline]
+fn brdf(m: &Material, ns: Vec3A, wi: Vec3A, wo: Vec3A) -> Vec3A {
+    m.diffuse * (1.0 / PI) + specular_lobe(m, ns, wi, wo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_at_normal_incidence_is_r0() {
+        for (n1, n2) in [(1.0f32, 1.5f32), (1.5, 1.0), (1.0, 1.33), (2.4, 1.0)] {
+            let expected = ((n1 - n2) / (n1 + n2)).powi(2);
+            assert!((fresnel_schlick(n1, n2, 1.0, 1.0) - expected).abs() < 1e-7);
+            // The refract() path gives cos θt = 1 at normal incidence.
+            let (_, ci, ct) = refract(-Vec3A::Z, Vec3A::Z, n1 / n2).unwrap();
+            assert!((fresnel_schlick(n1, n2, ci, ct) - expected).abs() < 1e-6);
+        }
+        assert!((fresnel_schlick(1.0, 1.5, 1.0, 1.0) - 0.04).abs() < 1e-6);
+        // Grazing incidence from the lighter side reflects everything.
+        assert!((fresnel_schlick(1.0, 1.5, 0.0, 0.7) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn total_internal_reflection_beyond_the_critical_angle_only() {
+        let (n1, n2) = (1.5f32, 1.0f32);
+        let critical = (n2 / n1).asin();
+        let n = Vec3A::Z;
+        let dir = |theta: f32| Vec3A::new(theta.sin(), 0.0, -theta.cos());
+        assert!(refract(dir(critical + 0.01), n, n1 / n2).is_none());
+        assert!(refract(dir(1.5), n, n1 / n2).is_none());
+        let (t, _, _) = refract(dir(critical - 0.01), n, n1 / n2).expect("below the critical angle");
+        assert!(t.z < 0.0);
+        // Approaching the critical angle from below, Schlick with cos θt
+        // rises toward 1, i.e. it is continuous with TIR.
+        let r_at = |theta: f32| {
+            let (_, ci, ct) = refract(dir(theta), n, n1 / n2).unwrap();
+            fresnel_schlick(n1, n2, ci, ct)
+        };
+        assert!(r_at(critical - 0.1) < r_at(critical - 0.01));
+        assert!(r_at(critical - 0.01) < r_at(critical - 0.0005));
+        assert!(r_at(critical - 0.0005) > 0.8, "{}", r_at(critical - 0.0005));
+        // From the lighter side there is no TIR even at grazing angles.
+        assert!(refract(dir(1.55), n, n2 / n1).is_some());
+    }
+
+    #[test]
+    fn snell_law_holds() {
+        let n = Vec3A::Z;
+        for (theta_i, n1, n2) in [
+            (0.3f32, 1.0f32, 1.5f32),
+            (0.7, 1.0, 1.33),
+            (0.5, 1.5, 1.0),
+            (1.2, 1.0, 2.4),
+        ] {
+            let d = Vec3A::new(theta_i.sin(), 0.0, -theta_i.cos());
+            let (t, _, _) = refract(d, n, n1 / n2).unwrap();
+            assert!((t.length() - 1.0).abs() < 1e-5);
+            // Transmitted to the other side, in the plane of incidence,
+            // with n1 sin θi = n2 sin θt.
+            assert!(t.z < 0.0 && t.y.abs() < 1e-6 && t.x > 0.0);
+            let sin_t = (t.x * t.x + t.y * t.y).sqrt();
+            assert!((n1 * theta_i.sin() - n2 * sin_t).abs() < 1e-5, "{theta_i} {n1} {n2}");
+        }
+        // Reflection keeps the angle.
+        let d = Vec3A::new(0.6, 0.0, -0.8);
+        assert!((reflect(d, n) - Vec3A::new(0.6, 0.0, 0.8)).length() < 1e-6);
+    }
+
+    #[test]
+    fn lobes_are_energy_normalised() {
+        // Integrate the Blinn-Phong and Phong lobes × cos θi over the
+        // hemisphere for normal viewing: about 1 for every exponent
+        // (Blinn's normalisation is approximate, within ~15%).
+        let mut m = Material::diffuse("m", Vec3A::ZERO);
+        m.specular = Vec3A::ONE;
+        let n = Vec3A::Z;
+        for model in [ShadingModel::Phong, ShadingModel::BlinnPhong] {
+            m.model = model;
+            for shininess in [1.0f32, 10.0, 100.0] {
+                m.shininess = shininess;
+                let steps = 400;
+                let mut integral = 0.0f64;
+                for i in 0..steps {
+                    let theta = (i as f32 + 0.5) / steps as f32 * PI / 2.0;
+                    for j in 0..steps {
+                        let phi = (j as f32 + 0.5) / steps as f32 * 2.0 * PI;
+                        let wi = Vec3A::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                        let f = specular_lobe(&m, n, wi, Vec3A::Z).x;
+                        let dw = theta.sin() * (PI / 2.0 / steps as f32) * (2.0 * PI / steps as f32);
+                        integral += (f * theta.cos() * dw) as f64;
+                    }
+                }
+                assert!(integral > 0.5 && integral < 1.15, "{model:?} n={shininess}: {integral}");
+            }
+        }
+    }
+}
