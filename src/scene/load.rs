@@ -221,6 +221,44 @@ impl SceneError {
     }
 }
 
+/// An image size beyond the limits (memory is checked before any allocation).
+#[derive(Debug, Error, PartialEq)]
+pub enum ImageLimit {
+    /// The film would not fit the memory limit.
+    #[error("{0}")]
+    Film(String),
+    /// Too many camera samples.
+    #[error("{0}")]
+    Samples(String),
+}
+
+/// Checks `width × height × spp` against the film-memory and sample limits;
+/// shared by the scene loader and the CLI's overrides.
+pub fn check_image_limits(width: u32, height: u32, spp: u32) -> Result<(), ImageLimit> {
+    if width == 0 || height == 0 || spp == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(ImageLimit::Film(format!(
+            "{width}×{height} pixels, {spp} spp: width and height must be in 1..={MAX_IMAGE_SIDE} and spp ≥ 1"
+        )));
+    }
+    let pixels = width as u64 * height as u64;
+    let film_bytes = pixels * FILM_BYTES_PER_PIXEL;
+    if film_bytes > MAX_FILM_BYTES {
+        return Err(ImageLimit::Film(format!(
+            "{width}×{height} pixels need {:.1} GiB of film ({FILM_BYTES_PER_PIXEL} bytes per pixel), \
+             more than the {} GiB limit",
+            film_bytes as f64 / (1u64 << 30) as f64,
+            MAX_FILM_BYTES >> 30
+        )));
+    }
+    let samples = pixels * spp as u64;
+    if samples > MAX_CAMERA_SAMPLES {
+        return Err(ImageLimit::Samples(format!(
+            "{width}×{height} pixels × {spp} spp = {samples} camera samples, more than the limit of 2^40"
+        )));
+    }
+    Ok(())
+}
+
 /// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
 /// Relative mesh paths are resolved against the scene file's directory.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
@@ -432,26 +470,12 @@ impl Ctx<'_> {
             .map(|s| s.span())
             .next()
             .unwrap_or(0..0);
-        let pixels = width as u64 * height as u64;
-        let film_bytes = pixels * FILM_BYTES_PER_PIXEL;
-        if film_bytes > MAX_FILM_BYTES {
-            return Err(self.invalid(
-                size_span,
-                format!(
-                    "{width}×{height} pixels need {:.1} GiB of film ({FILM_BYTES_PER_PIXEL} bytes per pixel), \
-                     more than the {} GiB limit",
-                    film_bytes as f64 / (1u64 << 30) as f64,
-                    MAX_FILM_BYTES >> 30
-                ),
-            ));
-        }
-        let samples = pixels * spp as u64;
-        if samples > MAX_CAMERA_SAMPLES {
-            let span = r.spp.as_ref().map_or(size_span, |s| s.span());
-            return Err(self.invalid(
-                span,
-                format!("{width}×{height} pixels × {spp} spp = {samples} camera samples, more than the limit of 2^40"),
-            ));
+        if let Err(e) = check_image_limits(width, height, spp) {
+            let span = match e {
+                ImageLimit::Samples(_) => r.spp.as_ref().map_or(size_span, |s| s.span()),
+                ImageLimit::Film(_) => size_span,
+            };
+            return Err(self.invalid(span, e.to_string()));
         }
         let exposure = match &r.exposure {
             None => d.exposure,
