@@ -61,7 +61,7 @@ pub(crate) fn open(path: &Path, limits: &LoadLimits) -> Result<Source, ParseErro
         .map_err(|e| ParseError::new(None, format!("cannot read: {e}")))?;
     let compressed = head.starts_with(&[0x1f, 0x8b]);
     let inner: Box<dyn Read> = if compressed {
-        Box::new(flate2::bufread::MultiGzDecoder::new(reader))
+        Box::new(Prefetch::spawn(flate2::bufread::MultiGzDecoder::new(reader)))
     } else {
         Box::new(reader)
     };
@@ -70,6 +70,90 @@ pub(crate) fn open(path: &Path, limits: &LoadLimits) -> Result<Source, ParseErro
         file_len,
         compressed,
     })
+}
+
+/// Runs a reader (the gzip decoder) on its own thread, a few chunks ahead of
+/// the parser, so decompression and parsing overlap (on the full dragon they
+/// take similar time). At most `DEPTH` chunks are in flight, so memory stays
+/// bounded; when the parser stops early, the channel closes and the thread ends.
+struct Prefetch {
+    chunks: std::sync::mpsc::Receiver<std::io::Result<Vec<u8>>>,
+    current: Vec<u8>,
+    pos: usize,
+    done: bool,
+}
+
+impl Prefetch {
+    const DEPTH: usize = 4;
+
+    fn spawn(mut inner: impl Read + Send + 'static) -> Self {
+        let (send, chunks) = std::sync::mpsc::sync_channel(Self::DEPTH);
+        std::thread::spawn(move || loop {
+            let mut chunk = vec![0u8; CHUNK];
+            let mut filled = 0;
+            // Fill whole chunks: the decoder returns small pieces.
+            let result = loop {
+                match inner.read(&mut chunk[filled..]) {
+                    Ok(0) => break Ok(()),
+                    Ok(n) => {
+                        filled += n;
+                        if filled == CHUNK {
+                            break Ok(());
+                        }
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(e) => break Err(e),
+                }
+            };
+            chunk.truncate(filled);
+            let end = filled == 0;
+            let stop = match result {
+                Ok(()) => send.send(Ok(chunk)).is_err() || end,
+                Err(e) => {
+                    if filled > 0 {
+                        let _ = send.send(Ok(chunk));
+                    }
+                    let _ = send.send(Err(e));
+                    true
+                }
+            };
+            if stop {
+                return;
+            }
+        });
+        Self {
+            chunks,
+            current: Vec::new(),
+            pos: 0,
+            done: false,
+        }
+    }
+}
+
+impl Read for Prefetch {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        while self.pos == self.current.len() {
+            if self.done {
+                return Ok(0);
+            }
+            match self.chunks.recv() {
+                Ok(Ok(chunk)) if chunk.is_empty() => self.done = true,
+                Ok(Ok(chunk)) => {
+                    self.current = chunk;
+                    self.pos = 0;
+                }
+                Ok(Err(e)) => {
+                    self.done = true;
+                    return Err(e);
+                }
+                Err(_) => self.done = true,
+            }
+        }
+        let n = out.len().min(self.current.len() - self.pos);
+        out[..n].copy_from_slice(&self.current[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
 }
 
 /// A byte stream with a text tokenizer (line counting, `#` comments) and
