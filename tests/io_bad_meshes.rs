@@ -258,6 +258,10 @@ fn ply_bad_headers() {
             .as_bytes(),
     );
     fails_with(&p, "line 3: element 'vertex' has a negative count -3");
+    let mut latin1 = b"ply\nformat ascii 1.0\ncomment caf\xe9\n".to_vec();
+    latin1.extend_from_slice(&PLY_TRI_HEADER.as_bytes()[21..]);
+    let p = d.write("f.ply", &latin1);
+    fails_with(&p, "line 3: header line is not ASCII/UTF-8 text");
 }
 
 #[test]
@@ -343,4 +347,62 @@ fn obj_hostile_indices_and_values() {
     );
     let p = d.write("d.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//7\n");
     fails_with(&p, "line 5: invalid OBJ");
+}
+
+/// Seeded random corruptions (byte changes, insertions, truncations) of valid
+/// files in every format: each load must return, Ok or Err, without panicking.
+#[test]
+fn random_corruptions_never_panic() {
+    let d = Dir::new();
+    let ascii_ply = PLY_TRI_HEADER.to_string() + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let seeds: [(&str, Vec<u8>); 4] = [
+        ("m.ply", binary_ply()),
+        ("a.ply", ascii_ply.into_bytes()),
+        (
+            "m.off",
+            b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n4 0 1 2 3\n".to_vec(),
+        ),
+        (
+            "m.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 1 3 2\n".to_vec(),
+        ),
+    ];
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let interesting = [b'0', b'9', b'-', b' ', b'\n', b'.', b'e', 0, 0xff, b'#', b'/', 0x7f];
+    let (mut loaded, mut refused) = (0, 0);
+    for (name, original) in &seeds {
+        for round in 0..300 {
+            let mut bytes = original.clone();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % bytes.len() as u64) as usize;
+                let value = if next() % 2 == 0 {
+                    interesting[(next() % interesting.len() as u64) as usize]
+                } else {
+                    next() as u8
+                };
+                match next() % 4 {
+                    0 => bytes.insert(i, value),
+                    1 => bytes.truncate(i.max(1)),
+                    _ => bytes[i] = value,
+                }
+            }
+            // A new file each time: rewriting one file makes ext4 flush it on close.
+            let p = d.write(&format!("{round}{name}"), &bytes);
+            match load_mesh(&p) {
+                Ok(_) => loaded += 1,
+                Err(e) => {
+                    assert!(e.to_string().starts_with(&p.display().to_string()), "{e}");
+                    refused += 1;
+                }
+            }
+        }
+    }
+    println!("{loaded} corrupted files still loaded, {refused} refused");
+    assert!(loaded > 0 && refused > 600, "{loaded} loaded, {refused} refused");
 }

@@ -103,19 +103,18 @@ fn header_error(line: u64, problem: String) -> ParseError {
 
 fn parse_header(s: &mut ByteStream, limits: &LoadLimits) -> Result<Header, ParseError> {
     match s.header_line()? {
-        Some(l) if l.trim_end() == "ply" => {}
+        Some((_, l)) if l.trim_end() == "ply" => {}
         _ => return Err(header_error(1, "not a PLY file: the first line must be 'ply'".into())),
     }
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     loop {
-        let Some(text) = s.header_line()? else {
+        let Some((line, text)) = s.header_line()? else {
             return Err(header_error(
                 s.line(),
                 "the file ends inside the header (no 'end_header')".into(),
             ));
         };
-        let line = s.line() - 1;
         if line > MAX_HEADER_LINES {
             return Err(header_error(
                 line,

@@ -260,8 +260,10 @@ impl ByteStream {
 
     // ---------------------------------------------------------------- text
 
-    /// Reads one header line (PLY), without its terminator. `None` at the end.
-    pub fn header_line(&mut self) -> Result<Option<String>, ParseError> {
+    /// Reads one header line (PLY), without its terminator, with its line
+    /// number. `None` at the end.
+    pub fn header_line(&mut self) -> Result<Option<(u64, String)>, ParseError> {
+        let number = self.line;
         let mut line = Vec::new();
         loop {
             if !self.fill()? {
@@ -279,7 +281,7 @@ impl ByteStream {
             line.push(b);
             if line.len() > MAX_HEADER_LINE {
                 return Err(ParseError::new(
-                    Some(self.here()),
+                    Some(Place::Line(number)),
                     format!("header line longer than {MAX_HEADER_LINE} bytes"),
                 ));
             }
@@ -287,12 +289,9 @@ impl ByteStream {
         if line.last() == Some(&b'\r') {
             line.pop();
         }
-        String::from_utf8(line).map(Some).map_err(|_| {
-            ParseError::new(
-                Some(Place::Line(self.line - 1)),
-                "header line is not ASCII/UTF-8 text".into(),
-            )
-        })
+        String::from_utf8(line)
+            .map(|text| Some((number, text)))
+            .map_err(|_| ParseError::new(Some(Place::Line(number)), "header line is not ASCII/UTF-8 text".into()))
     }
 
     /// Skips blanks, and line ends and `#` comments when `cross_lines`; stops
