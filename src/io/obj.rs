@@ -1,0 +1,206 @@
+//! Wavefront OBJ through the `tobj` crate: polygons triangulated, every
+//! object and group merged into one mesh, materials ignored (the scene file
+//! assigns materials). File normals are kept only when each vertex has one
+//! consistent normal (OBJ lets a vertex carry different normals on different
+//! faces, which per-vertex smooth shading cannot represent); otherwise they are
+//! computed. `tobj` reports no positions, so on error the loader finds the
+//! first offending line itself.
+
+use super::source::{parse_f32, parse_i64, Source};
+use super::{ParseError, Place};
+use crate::math::Vec3;
+use crate::scene::Mesh;
+use std::collections::HashMap;
+use std::io::Read;
+
+/// Largest OBJ text (after decompression) read into memory: `tobj` needs it whole.
+pub const MAX_OBJ_BYTES: u64 = 2 << 30;
+
+pub(crate) fn parse(src: &mut Source, name: String) -> Result<Mesh, ParseError> {
+    let mut text = Vec::new();
+    let read = (&mut src.stream)
+        .take(MAX_OBJ_BYTES + 1)
+        .read_to_end(&mut text)
+        .map_err(|e| ParseError::new(None, e.to_string()))?;
+    if read as u64 > MAX_OBJ_BYTES {
+        return Err(ParseError::new(
+            None,
+            format!("more than {MAX_OBJ_BYTES} bytes of OBJ text: refusing to read further"),
+        ));
+    }
+    if let Err(e) = std::str::from_utf8(&text) {
+        let line = line_of(&text, e.valid_up_to());
+        return Err(ParseError::new(
+            Some(Place::Line(line)),
+            "not UTF-8 text (a binary file named .obj?)".into(),
+        ));
+    }
+    let options = tobj::LoadOptions {
+        single_index: false,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _materials) = tobj::load_obj_buf(&mut &text[..], &options, |_| Ok((Vec::new(), HashMap::new())))
+        .map_err(|e| ParseError::new(locate(&text, &e), format!("invalid OBJ: {e}")))?;
+
+    let mut positions: Vec<Vec3> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut normals: Vec<Option<Vec3>> = Vec::new();
+    let mut normals_consistent = true;
+    for model in &models {
+        let m = &model.mesh;
+        let offset = positions.len();
+        if offset + m.positions.len() / 3 > u32::MAX as usize {
+            return Err(ParseError::new(None, "more than 2^32 vertices".into()));
+        }
+        positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        normals.resize(positions.len(), None);
+        triangles.extend(
+            m.indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]].map(|i| i + offset as u32)),
+        );
+        if m.normal_indices.len() != m.indices.len() {
+            normals_consistent = false;
+            continue;
+        }
+        for (&pi, &ni) in m.indices.iter().zip(&m.normal_indices) {
+            let ni = ni as usize * 3;
+            let Some(n) = m.normals.get(ni..ni + 3) else {
+                normals_consistent = false;
+                break;
+            };
+            let n = Vec3::new(n[0], n[1], n[2]);
+            let slot = &mut normals[offset + pi as usize];
+            match slot {
+                None => *slot = Some(n),
+                Some(old) if *old == n => {}
+                Some(_) => normals_consistent = false,
+            }
+        }
+    }
+    let normals = if normals_consistent {
+        normals.into_iter().collect::<Option<Vec<Vec3>>>()
+    } else {
+        None
+    };
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(ParseError::new(
+            None,
+            format!("vertex {i} (counting from 0 in file order) has a non-finite coordinate"),
+        ));
+    }
+    Ok(Mesh::new(name, positions, triangles, normals)?)
+}
+
+/// 1-based line number of byte `offset`.
+fn line_of(text: &[u8], offset: usize) -> u64 {
+    text[..offset].iter().filter(|&&b| b == b'\n').count() as u64 + 1
+}
+
+/// Finds the first line that explains a `tobj` error: a bad `v`/`vn`/`vt`
+/// record, or a face whose vertex references do not parse or are out of range.
+fn locate(text: &[u8], error: &tobj::LoadError) -> Option<Place> {
+    use tobj::LoadError as E;
+    let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
+    for (number, line) in text.split(|&b| b == b'\n').enumerate() {
+        let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+        let Some(keyword) = words.next() else { continue };
+        let fields: Vec<&[u8]> = words.collect();
+        let floats_ok = |min: usize| fields.len() >= min && fields.iter().all(|f| parse_f32(f).is_some());
+        let here = Some(Place::Line(number as u64 + 1));
+        match keyword {
+            b"v" => {
+                if matches!(error, E::PositionParseError) && !floats_ok(3) {
+                    return here;
+                }
+                v += 1;
+            }
+            b"vt" => {
+                if matches!(error, E::TexcoordParseError) && !floats_ok(1) {
+                    return here;
+                }
+                vt += 1;
+            }
+            b"vn" => {
+                if matches!(error, E::NormalParseError) && !floats_ok(3) {
+                    return here;
+                }
+                vn += 1;
+            }
+            b"f" => {
+                if fields.len() < 3 {
+                    return here;
+                }
+                for field in &fields {
+                    let parts: Vec<&[u8]> = field.split(|&b| b == b'/').collect();
+                    for (k, part) in parts.iter().enumerate().take(3) {
+                        if part.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let count = [v, vt, vn][k];
+                        match parse_i64(part) {
+                            Some(i) if i > 0 && i <= count => {}
+                            Some(i) if i < 0 && -i <= count => {}
+                            _ => return here,
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::load_mesh;
+
+    fn load_text(text: &str) -> Result<Mesh, crate::io::MeshError> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.obj");
+        std::fs::write(&path, text).unwrap();
+        load_mesh(&path)
+    }
+
+    #[test]
+    fn groups_merged_and_polygons_triangulated() {
+        let text = "# two objects\no a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n\
+                    o b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 5 6 7\n";
+        let m = load_text(text).unwrap();
+        assert_eq!(m.positions.len(), 7);
+        assert_eq!(m.triangles.len(), 3);
+        assert_eq!(m.triangles[2].map(|i| m.positions[i as usize].z), [1.0; 3]);
+        assert!(m.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
+    }
+
+    #[test]
+    fn consistent_normals_are_used() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1 0 0\nvn 0 1 0\nf 1//1 2//2 3//1\n";
+        let m = load_text(text).unwrap();
+        assert_eq!(m.normals, vec![Vec3::X, Vec3::Y, Vec3::X]);
+    }
+
+    #[test]
+    fn inconsistent_normals_are_recomputed() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 1 0 0\nvn 0 1 0\n\
+                    f 1//1 2//1 3//1\nf 2//2 4//2 3//2\n";
+        let m = load_text(text).unwrap();
+        assert!(
+            m.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6),
+            "{:?}",
+            m.normals
+        );
+    }
+
+    #[test]
+    fn errors_are_located() {
+        let e = load_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap_err();
+        assert!(e.message.starts_with("line 4: invalid OBJ"), "{e}");
+        let e = load_text("v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert!(e.message.starts_with("line 2: invalid OBJ"), "{e}");
+    }
+}
