@@ -337,7 +337,6 @@ fn run_info(args: InfoArgs) -> Result<(), Failure> {
     for (k, v) in &s.details {
         println!("            {k}: {v}");
     }
-    println!("render plan");
     println!("{}", RenderPlan::new(&scene));
     Ok(())
 }
