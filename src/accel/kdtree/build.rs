@@ -244,9 +244,13 @@ pub fn clip_triangle(p: [Vec3A; 3], cell: &Aabb) -> Aabb {
     if tri.min.cmpge(cell.min).all() && tri.max.cmple(cell.max).all() {
         return tri;
     }
-    let mut poly = [Vec3A::ZERO; 9];
-    let mut next = [Vec3A::ZERO; 9];
-    poly[..3].copy_from_slice(&p);
+    // Vertices with a flag: true for the triangle's own (exact) corners,
+    // false for computed intersection points.
+    let mut poly = [(Vec3A::ZERO, true); 9];
+    let mut next = [(Vec3A::ZERO, true); 9];
+    for (slot, &v) in poly.iter_mut().zip(&p) {
+        *slot = (v, true);
+    }
     let mut len = 3;
     for axis in 0..3 {
         for (plane, keep_above) in [(cell.min[axis], true), (cell.max[axis], false)] {
@@ -263,16 +267,16 @@ pub fn clip_triangle(p: [Vec3A; 3], cell: &Aabb) -> Aabb {
             for i in 0..len {
                 let a = poly[i];
                 let b = poly[(i + 1) % len];
-                let (ina, inb) = (inside(a), inside(b));
+                let (ina, inb) = (inside(a.0), inside(b.0));
                 if ina {
                     next[out] = a;
                     out += 1;
                 }
                 if ina != inb {
-                    let t = (plane - a[axis]) / (b[axis] - a[axis]);
-                    let mut x = a + (b - a) * t;
+                    let t = (plane - a.0[axis]) / (b.0[axis] - a.0[axis]);
+                    let mut x = a.0 + (b.0 - a.0) * t;
                     x[axis] = plane;
-                    next[out] = x;
+                    next[out] = (x, false);
                     out += 1;
                 }
             }
@@ -285,9 +289,17 @@ pub fn clip_triangle(p: [Vec3A; 3], cell: &Aabb) -> Aabb {
     if len == 0 {
         return fallback;
     }
-    let b = Aabb::from_points(poly[..len].iter().copied());
+    // Only computed points are widened: a corner lying on a later split
+    // plane keeps its exact coordinate, so the triangle is not duplicated.
     let err = tri.min.abs().max(tri.max.abs()) * (32.0 * f32::EPSILON);
-    Aabb::new(b.min - err, b.max + err).intersection(fallback)
+    let b = poly[..len].iter().fold(Aabb::EMPTY, |b, &(v, exact)| {
+        if exact {
+            b.grow(v)
+        } else {
+            b.union(Aabb::new(v - err, v + err))
+        }
+    });
+    b.intersection(fallback)
 }
 
 /// Reused per-thread buffers of the split step (no allocation per node for them).
