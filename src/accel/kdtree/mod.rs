@@ -1,27 +1,485 @@
-//! The in-house two-level SAH KD-tree. (Scaffold: delegates to brute force until the real tree lands.)
+//! The in-house two-level SAH KD-tree.
+//!
+//! * Bottom level: one tree per distinct mesh, in object space, shared by all
+//!   the objects that instance the mesh. Built with Wald & Havran's O(N log N)
+//!   event-sorting SAH build with perfect splits ([`build`]).
+//! * Top level: a KD-tree of the same kind over the world bounds of the
+//!   objects (mesh instances, spheres, quads); an object straddling a plane is
+//!   referenced by both sides, and a small mailbox avoids testing it twice in
+//!   one query.
+//! * Traversal: iterative, front to back, fixed stack (pbrt-v3
+//!   `KdTreeAccel::Intersect`), rays moved into object space with
+//!   `Transform::ray_to_object` (the direction is not renormalised, so `t`
+//!   keeps its world meaning).
+//!
+//! Results are identical to [`BruteForce`](super::brute::BruteForce): every
+//! primitive is tested against the whole ray range with the same test, ties at
+//! equal `t` are broken like the oracle's loop (lowest object, then lowest
+//! triangle), and traversal intervals carry a rounding margin so no leaf that
+//! could hold the closest hit is skipped.
 
-use super::{brute::BruteForce, Accel, AccelOptions, AccelStats, Hit};
-use crate::math::Ray;
-use crate::scene::Scene;
+pub mod build;
+mod node;
+
+use self::build::{build_tree, clip_triangle, Primitives, SahParams};
+use self::node::{widen, KdTree, LeafResult, TreeShape};
+use super::triangle::{moller_trumbore, WatertightRay};
+use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
+use crate::math::{Aabb, Ray, Transform, Vec3A};
+use crate::scene::{Mesh, Quad, Scene, Shape, Sphere};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// An entry of the top level.
+#[derive(Clone, Debug)]
+enum TopObject {
+    Sphere(Sphere),
+    Quad(Quad),
+    Mesh { mesh: u32, transform: Transform },
+}
 
 /// Two-level KD-tree accelerator.
-pub struct KdTreeAccel(BruteForce);
+pub struct KdTreeAccel {
+    objects: Vec<TopObject>,
+    top: KdTree,
+    meshes: Vec<Arc<Mesh>>,
+    /// One tree per entry of `meshes` (empty for meshes no object uses).
+    blas: Vec<KdTree>,
+    test: TriangleTest,
+    build_time: Duration,
+}
+
+/// A mesh's triangles as build primitives.
+struct TrianglePrims<'a>(&'a Mesh);
+
+impl Primitives for TrianglePrims<'_> {
+    fn count(&self) -> usize {
+        self.0.triangles.len()
+    }
+    fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
+        clip_triangle(self.0.corners(i as usize), cell)
+    }
+    fn bounds(&self, i: u32) -> Aabb {
+        Aabb::from_points(self.0.corners(i as usize))
+    }
+}
+
+/// Object bounds as build primitives: clipping is the box intersection.
+struct BoxPrims(Vec<Aabb>);
+
+impl Primitives for BoxPrims {
+    fn count(&self) -> usize {
+        self.0.len()
+    }
+    fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
+        self.0[i as usize].intersection(*cell)
+    }
+    fn bounds(&self, i: u32) -> Aabb {
+        self.0[i as usize]
+    }
+}
+
+/// Objects remembered per query by the `Mailbox`.
+const MAILBOX_SIZE: usize = 8;
 
 impl KdTreeAccel {
-    /// Builds the tree.
+    /// Builds the bottom-level trees (one per mesh used by an object, in
+    /// parallel) and the top-level tree over all objects.
     pub fn build(scene: &Scene, options: &AccelOptions) -> Self {
-        Self(BruteForce::new(scene, options.triangle_test))
+        Self::build_with(scene, options, &SahParams::default())
+    }
+
+    /// As [`build`](Self::build) with explicit SAH parameters (benchmarks and tuning).
+    pub fn build_with(scene: &Scene, options: &AccelOptions, params: &SahParams) -> Self {
+        let start = Instant::now();
+        let mut used = vec![false; scene.meshes.len()];
+        let objects: Vec<TopObject> = scene
+            .objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Sphere(s) => TopObject::Sphere(*s),
+                Shape::Quad(q) => TopObject::Quad(*q),
+                Shape::Mesh { mesh, transform, .. } => {
+                    used[*mesh as usize] = true;
+                    TopObject::Mesh {
+                        mesh: *mesh,
+                        transform: *transform,
+                    }
+                }
+            })
+            .collect();
+        let blas: Vec<KdTree> = scene
+            .meshes
+            .par_iter()
+            .zip(used.par_iter())
+            .map(|(mesh, &used)| {
+                if used {
+                    build_tree(&TrianglePrims(mesh), params)
+                } else {
+                    KdTree::default()
+                }
+            })
+            .collect();
+        // World bounds, widened by a few ulps: transformed corners and the
+        // analytic shapes' hit points carry rounding error.
+        let bounds: Vec<Aabb> = objects
+            .iter()
+            .map(|o| match o {
+                TopObject::Sphere(s) => widen(s.bounds()),
+                TopObject::Quad(q) => widen(q.bounds()),
+                TopObject::Mesh { mesh, transform } => widen(transform.bounds(&blas[*mesh as usize].bounds)),
+            })
+            .collect();
+        let top = build_tree(&BoxPrims(bounds), params);
+        Self {
+            objects,
+            top,
+            meshes: scene.meshes.clone(),
+            blas,
+            test: options.triangle_test,
+            build_time: start.elapsed(),
+        }
+    }
+
+    /// World-space cells of the top-level tree and of each mesh instance's
+    /// bottom-level tree (its object-space cells transformed to world bounds),
+    /// down to `max_depth`, each with its depth within its own tree (0 = root).
+    /// For the KD-tree debug overlay.
+    pub fn node_boxes(&self, max_depth: u32) -> Vec<(Aabb, u32)> {
+        let mut out = self.top.cells(max_depth);
+        for o in &self.objects {
+            if let TopObject::Mesh { mesh, transform } = o {
+                out.extend(
+                    self.blas[*mesh as usize]
+                        .cells(max_depth)
+                        .into_iter()
+                        .map(|(b, d)| (transform.bounds(&b), d)),
+                );
+            }
+        }
+        out
+    }
+
+    /// Tests one object (all its triangles for a mesh, through its tree)
+    /// against `ray` below `limit`, reporting every hit to `found` (which may
+    /// lower `limit`). With `any`, a mesh stops at its first hit.
+    #[inline]
+    fn test_object(&self, ray: &Ray, instance: u32, limit: &mut f32, any: bool, found: &mut impl FnMut(Hit, &mut f32)) {
+        match &self.objects[instance as usize] {
+            TopObject::Sphere(s) => {
+                if let Some(t) = s.intersect(ray, *limit) {
+                    let hit = Hit {
+                        t,
+                        instance,
+                        prim: 0,
+                        u: 0.0,
+                        v: 0.0,
+                    };
+                    found(hit, limit);
+                }
+            }
+            TopObject::Quad(q) => {
+                if let Some((t, u, v)) = q.intersect(ray, *limit) {
+                    found(
+                        Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u,
+                            v,
+                        },
+                        limit,
+                    );
+                }
+            }
+            TopObject::Mesh { mesh, transform } => {
+                let local = transform.ray_to_object(ray);
+                let tree = &self.blas[*mesh as usize];
+                let mesh = &*self.meshes[*mesh as usize];
+                let watertight = WatertightRay::new(&local);
+                let test = self.test;
+                tree.traverse(&local, *limit, |prims| {
+                    for &prim in prims {
+                        let [p0, p1, p2] = mesh.corners(prim as usize);
+                        let result = match test {
+                            TriangleTest::Watertight => watertight.intersect(p0, p1, p2, *limit),
+                            TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, *limit),
+                        };
+                        if let Some((t, u, v)) = result {
+                            found(
+                                Hit {
+                                    t,
+                                    instance,
+                                    prim,
+                                    u,
+                                    v,
+                                },
+                                limit,
+                            );
+                            if any {
+                                return LeafResult::Stop;
+                            }
+                        }
+                    }
+                    LeafResult::Continue(*limit)
+                });
+            }
+        }
+    }
+
+    /// Re-tests one primitive of one object below `limit` (tie resolution).
+    fn test_prim(&self, ray: &Ray, instance: u32, prim: u32, limit: f32) -> Option<(f32, f32, f32)> {
+        match &self.objects[instance as usize] {
+            TopObject::Sphere(s) => s.intersect(ray, limit).map(|t| (t, 0.0, 0.0)),
+            TopObject::Quad(q) => q.intersect(ray, limit),
+            TopObject::Mesh { mesh, transform } => {
+                let local = transform.ray_to_object(ray);
+                let [p0, p1, p2] = self.meshes[*mesh as usize].corners(prim as usize);
+                match self.test {
+                    TriangleTest::Watertight => WatertightRay::new(&local).intersect(p0, p1, p2, limit),
+                    TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, limit),
+                }
+            }
+        }
+    }
+
+    /// Any hit with `0 < t < t_max`.
+    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+        if !Self::is_queryable(ray, t_max) {
+            return false;
+        }
+        let mut hit = false;
+        let mut mailbox = Mailbox::default();
+        self.top.traverse(ray, t_max, |objects| {
+            for &instance in objects {
+                if mailbox.seen(instance) {
+                    continue;
+                }
+                let mut limit = t_max;
+                self.test_object(ray, instance, &mut limit, true, &mut |_, _| hit = true);
+                if hit {
+                    return LeafResult::Stop;
+                }
+            }
+            LeafResult::Continue(t_max)
+        });
+        hit
+    }
+
+    /// The oracle finds nothing for these rays (every test compares NaN or
+    /// divides by a zero direction); the traversal's interval arithmetic
+    /// assumes a real ray, so they are answered before it.
+    fn is_queryable(ray: &Ray, t_max: f32) -> bool {
+        t_max > 0.0 && ray.origin.is_finite() && ray.dir.is_finite() && ray.dir != Vec3A::ZERO
+    }
+
+    /// Closest hit with `0 < t < t_max`, identical to the brute-force loop's.
+    ///
+    /// The oracle visits objects and triangles in index order and accepts a
+    /// hit only below the best `t` found so far. Triangle tests decide `t <
+    /// limit` on `t·det` before dividing, so a hit may be rejected by a limit
+    /// that is up to a few ulps above its own `t`: when two surfaces are hit
+    /// within ulps of each other, the oracle's answer depends on their order.
+    /// The traversal therefore collects every hit within `TIE_ULPS` of the
+    /// best and, when there are several, replays the oracle's ordered loop on
+    /// them alone. (Hits further away cannot change that loop's outcome: any
+    /// limit more than 8 ulps above a hit's `t` accepts it.)
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if !Self::is_queryable(ray, t_max) {
+            return None;
+        }
+        let mut near = NearHits::default();
+        let mut best_t = f32::INFINITY;
+        let mut mailbox = Mailbox::default();
+        let mut window = |t: f32| ulps_above(t, TIE_ULPS).min(t_max);
+        self.top.traverse(ray, t_max, |objects| {
+            for &instance in objects {
+                if mailbox.seen(instance) {
+                    continue;
+                }
+                let mut limit = if best_t.is_finite() { window(best_t) } else { t_max };
+                self.test_object(ray, instance, &mut limit, false, &mut |hit, limit| {
+                    if hit.t < best_t {
+                        best_t = hit.t;
+                        *limit = window(best_t);
+                    }
+                    near.push(hit);
+                });
+            }
+            LeafResult::Continue(if best_t.is_finite() { window(best_t) } else { t_max })
+        });
+        near.resolve(
+            best_t,
+            &mut window,
+            |h, limit| self.test_prim(ray, h.instance, h.prim, limit),
+            t_max,
+        )
+    }
+}
+
+/// Hits are gathered within this many ulps above the best `t` (see
+/// `closest_hit`): twice the largest gap, 8 ulps, between a hit's `t` and the
+/// lowest limit that accepts it (Woop et al.'s division-free range test:
+/// two roundings in `t`, one in `limit·det`).
+const TIE_ULPS: u32 = 16;
+
+/// Positive `t` moved up by `n` ulps (saturating at +inf).
+#[inline]
+fn ulps_above(t: f32, n: u32) -> f32 {
+    debug_assert!(t >= 0.0);
+    f32::from_bits((t + 0.0).to_bits().saturating_add(n).min(f32::INFINITY.to_bits()))
+}
+
+/// Recently tested objects (mailboxing, Amanatides & Woo 1987): an object
+/// several top-level leaves reference is tested once per query.
+#[derive(Default)]
+struct Mailbox {
+    ids: [u32; MAILBOX_SIZE],
+    used: usize,
+}
+
+impl Mailbox {
+    /// True when `id` was tested already; else remembers it.
+    #[inline]
+    fn seen(&mut self, id: u32) -> bool {
+        let n = self.used.min(MAILBOX_SIZE);
+        if self.ids[..n].contains(&id) {
+            return true;
+        }
+        self.ids[self.used % MAILBOX_SIZE] = id;
+        self.used += 1;
+        false
+    }
+}
+
+/// Hits collected by a closest-hit query: a fixed buffer, spilling to the
+/// heap only when a ray meets many surfaces at almost the same `t`.
+#[derive(Default)]
+struct NearHits {
+    fixed: [Option<Hit>; 8],
+    len: usize,
+    spill: Vec<Hit>,
+}
+
+impl NearHits {
+    #[inline]
+    fn push(&mut self, hit: Hit) {
+        if self.len < self.fixed.len() {
+            self.fixed[self.len] = Some(hit);
+            self.len += 1;
+        } else {
+            self.spill.push(hit);
+        }
+    }
+
+    /// The oracle's answer among the collected hits within the window of `best_t`.
+    fn resolve(
+        self,
+        best_t: f32,
+        window: &mut impl FnMut(f32) -> f32,
+        mut retest: impl FnMut(&Hit, f32) -> Option<(f32, f32, f32)>,
+        t_max: f32,
+    ) -> Option<Hit> {
+        if !best_t.is_finite() && self.len == 0 {
+            return None;
+        }
+        let top = window(best_t);
+        let mut candidates: Vec<Hit> = Vec::new();
+        let mut single: Option<Hit> = None;
+        let mut count = 0;
+        for h in self.fixed[..self.len].iter().flatten().chain(self.spill.iter()) {
+            if h.t <= top {
+                count += 1;
+                if count == 1 {
+                    single = Some(*h);
+                } else {
+                    if count == 2 {
+                        candidates.push(single.unwrap());
+                    }
+                    candidates.push(*h);
+                }
+            }
+        }
+        if count <= 1 {
+            return single;
+        }
+        // Replay the oracle's loop: object order, then triangle order, each
+        // accepted only below the last accepted t.
+        candidates.sort_by_key(|h| (h.instance, h.prim));
+        candidates.dedup_by_key(|h| (h.instance, h.prim));
+        let mut limit = t_max;
+        let mut answer = None;
+        for h in candidates {
+            if let Some((t, u, v)) = retest(&h, limit) {
+                limit = t;
+                answer = Some(Hit { t, u, v, ..h });
+            }
+        }
+        answer
     }
 }
 
 impl Accel for KdTreeAccel {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.0.intersect(ray, t_max)
+        self.closest_hit(ray, t_max)
     }
+
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.0.occluded(ray, t_max)
+        self.any_hit(ray, t_max)
     }
+
     fn stats(&self) -> AccelStats {
-        self.0.stats()
+        let top = self.top.shape();
+        let mut bottom = TreeShape::default();
+        let mut triangles = 0usize;
+        let mut blas_count = 0usize;
+        for (tree, mesh) in self.blas.iter().zip(&self.meshes) {
+            if tree.nodes.is_empty() {
+                continue;
+            }
+            blas_count += 1;
+            triangles += mesh.triangles.len();
+            let s = tree.shape();
+            bottom.nodes += s.nodes;
+            bottom.leaves += s.leaves;
+            bottom.empty_leaves += s.empty_leaves;
+            bottom.references += s.references;
+            bottom.max_depth = bottom.max_depth.max(s.max_depth);
+        }
+        let memory_bytes = self.top.memory_bytes()
+            + self.blas.iter().map(KdTree::memory_bytes).sum::<usize>()
+            + self.objects.len() * std::mem::size_of::<TopObject>();
+        let full_leaves = (bottom.leaves - bottom.empty_leaves).max(1);
+        let details = vec![
+            ("top nodes".to_string(), top.nodes.to_string()),
+            ("top leaves".to_string(), top.leaves.to_string()),
+            ("top depth".to_string(), top.max_depth.to_string()),
+            ("bottom nodes".to_string(), bottom.nodes.to_string()),
+            ("bottom leaves".to_string(), bottom.leaves.to_string()),
+            ("bottom empty leaves".to_string(), bottom.empty_leaves.to_string()),
+            ("bottom depth".to_string(), bottom.max_depth.to_string()),
+            ("triangles".to_string(), triangles.to_string()),
+            ("triangle references".to_string(), bottom.references.to_string()),
+            (
+                "triangles per non-empty leaf".to_string(),
+                format!("{:.2}", bottom.references as f64 / full_leaves as f64),
+            ),
+            (
+                "triangle test".to_string(),
+                match self.test {
+                    TriangleTest::Watertight => "watertight".to_string(),
+                    TriangleTest::MollerTrumbore => "moller-trumbore".to_string(),
+                },
+            ),
+        ];
+        AccelStats {
+            name: "kdtree".into(),
+            build_time: self.build_time,
+            memory_bytes,
+            blas_count,
+            instances: self.objects.len(),
+            details,
+        }
     }
 }

@@ -1,0 +1,794 @@
+//! SAH KD-tree construction in O(N log N): Wald & Havran 2006, "On building
+//! fast kd-trees for ray tracing, and on doing that in O(N log N)".
+//!
+//! Events (start, end, planar) of every primitive's bounds are sorted once per
+//! axis at the root. At each node the three sorted lists are swept to find the
+//! best plane under the surface area heuristic (SAH); the primitives are then
+//! classified left / right / both from the split axis' events alone, the
+//! one-sided primitives' events are filtered into the children (they stay
+//! sorted), and only the primitives straddling the plane are clipped to each
+//! child cell ("perfect splits": Sutherland–Hodgman on the triangle), their
+//! new events sorted and merged in. Every level is linear, so the whole build
+//! is O(N log N).
+//!
+//! The two children of large nodes are built in parallel (rayon) into separate
+//! buffers that are appended in a fixed order, so the tree is the same for
+//! any number of threads.
+
+use super::node::{KdNode, KdTree, MAX_INDEX, MAX_TREE_DEPTH};
+use crate::math::{Aabb, Vec3A};
+use rayon::prelude::*;
+
+/// The primitives a tree is built over.
+pub(crate) trait Primitives: Sync {
+    /// Number of primitives.
+    fn count(&self) -> usize;
+    /// Bounds of the part of primitive `i` inside `cell`, conservative (it may
+    /// be larger than the exact part, never smaller) and inside `cell`.
+    fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb;
+    /// Full bounds of primitive `i`.
+    fn bounds(&self, i: u32) -> Aabb;
+}
+
+/// SAH constants and termination rules.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SahParams {
+    /// Cost of one traversal step (Wald & Havran's K_T).
+    pub traversal_cost: f32,
+    /// Cost of one primitive test (K_I).
+    pub intersect_cost: f32,
+    /// Factor applied to the cost of a split with an empty side (< 1 favours
+    /// cutting off empty space).
+    pub empty_bonus: f32,
+    /// Nodes with at most this many primitives become leaves.
+    pub leaf_size: usize,
+    /// Depth limit; `None` takes `8 + 1.3·log2(N)` (pbrt-v3's rule).
+    pub max_depth: Option<u32>,
+}
+
+impl Default for SahParams {
+    /// Tuned on the test meshes and random soups (see the report in
+    /// ARCHITECTURE.md): K_T = 15, K_I = 20 as in Wald & Havran §5, 0.8 empty bonus.
+    fn default() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            intersect_cost: 20.0,
+            empty_bonus: 0.8,
+            leaf_size: 1,
+            max_depth: None,
+        }
+    }
+}
+
+impl SahParams {
+    /// `8 + 1.3·log2(n)` (pbrt-v3), capped so the traversal stack never overflows.
+    pub fn depth_limit(&self, n: usize) -> u32 {
+        let d = self
+            .max_depth
+            .unwrap_or_else(|| (8.0 + 1.3 * (n.max(1) as f32).log2()).round() as u32);
+        d.min(MAX_TREE_DEPTH)
+    }
+
+    /// Wald & Havran eq. (3): `λ(p)·(K_T + K_I·(P_L·N_L + P_R·N_R))`, with
+    /// `P = SA(child) / SA(node)` and `λ` the empty-space bonus when a side is empty.
+    #[inline]
+    pub fn split_cost(&self, p_left: f32, p_right: f32, n_left: usize, n_right: usize) -> f32 {
+        let bonus = if n_left == 0 || n_right == 0 {
+            self.empty_bonus
+        } else {
+            1.0
+        };
+        bonus * (self.traversal_cost + self.intersect_cost * (p_left * n_left as f32 + p_right * n_right as f32))
+    }
+
+    /// Cost of not splitting.
+    #[inline]
+    pub fn leaf_cost(&self, n: usize) -> f32 {
+        self.intersect_cost * n as f32
+    }
+}
+
+/// Event kinds, in the sort order Wald & Havran require at equal positions:
+/// ends before planars before starts.
+const END: u64 = 0;
+const PLANAR: u64 = 1;
+const START: u64 = 2;
+
+/// Primitive indices local to a node take the low 30 bits of an event.
+const INDEX_MASK: u64 = (1 << 30) - 1;
+
+/// f32 → u32 whose unsigned order is the float order (−0 is folded onto +0).
+#[inline]
+fn order_key(pos: f32) -> u32 {
+    let bits = (pos + 0.0).to_bits();
+    if bits & 0x8000_0000 != 0 {
+        !bits
+    } else {
+        bits | 0x8000_0000
+    }
+}
+
+#[inline]
+fn from_order_key(key: u32) -> f32 {
+    f32::from_bits(if key & 0x8000_0000 != 0 {
+        key & 0x7fff_ffff
+    } else {
+        !key
+    })
+}
+
+/// An event packed in a u64 so that integer order is (position, kind, index):
+/// position key << 32 | kind << 30 | local primitive index.
+#[inline]
+fn event(pos: f32, kind: u64, index: u32) -> u64 {
+    ((order_key(pos) as u64) << 32) | (kind << 30) | index as u64
+}
+
+#[inline]
+fn event_key(e: u64) -> u32 {
+    (e >> 32) as u32
+}
+
+#[inline]
+fn event_kind(e: u64) -> u64 {
+    (e >> 30) & 3
+}
+
+#[inline]
+fn event_index(e: u64) -> usize {
+    (e & INDEX_MASK) as usize
+}
+
+#[inline]
+fn with_index(e: u64, index: u32) -> u64 {
+    (e & !INDEX_MASK) | index as u64
+}
+
+/// Pushes the events of bounds `b` of local primitive `index` on each axis.
+#[inline]
+fn push_events(events: &mut [Vec<u64>; 3], b: &Aabb, index: u32) {
+    for (axis, list) in events.iter_mut().enumerate() {
+        let (lo, hi) = (b.min[axis], b.max[axis]);
+        if lo == hi {
+            list.push(event(lo, PLANAR, index));
+        } else {
+            list.push(event(lo, START, index));
+            list.push(event(hi, END, index));
+        }
+    }
+}
+
+/// The best plane of a node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SplitChoice {
+    pub(crate) cost: f32,
+    pub(crate) axis: usize,
+    pub(crate) pos: f32,
+    /// Where primitives lying in the plane go.
+    pub(crate) planar_left: bool,
+}
+
+/// Wald & Havran Algorithm 4 on one axis: sweeps the sorted events, keeping
+/// the counts left (N_L), in the plane (N_P) and right (N_R) of each
+/// candidate position, and returns the cheapest plane strictly inside the cell
+/// (planes on the cell's faces would only create flat empty cells).
+pub(crate) fn sweep_axis(
+    params: &SahParams,
+    cell: &Aabb,
+    axis: usize,
+    events: &[u64],
+    n: usize,
+) -> Option<SplitChoice> {
+    let sa = cell.surface_area();
+    if sa.is_nan() || sa <= 0.0 {
+        return None;
+    }
+    let inv_sa = 1.0 / sa;
+    let ext = cell.extent();
+    let (a, b) = (ext[(axis + 1) % 3], ext[(axis + 2) % 3]);
+    let (lo, hi) = (cell.min[axis], cell.max[axis]);
+    let (mut n_left, mut n_right) = (0usize, n);
+    let mut best: Option<SplitChoice> = None;
+    let mut i = 0;
+    while i < events.len() {
+        let key = event_key(events[i]);
+        let (mut ending, mut planar, mut starting) = (0usize, 0usize, 0usize);
+        while i < events.len() && event_key(events[i]) == key && event_kind(events[i]) == END {
+            ending += 1;
+            i += 1;
+        }
+        while i < events.len() && event_key(events[i]) == key && event_kind(events[i]) == PLANAR {
+            planar += 1;
+            i += 1;
+        }
+        while i < events.len() && event_key(events[i]) == key && event_kind(events[i]) == START {
+            starting += 1;
+            i += 1;
+        }
+        let n_planar = planar;
+        n_right -= planar + ending;
+        let pos = from_order_key(key);
+        if pos > lo && pos < hi {
+            let (dl, dr) = (pos - lo, hi - pos);
+            let p_left = 2.0 * (a * b + (a + b) * dl) * inv_sa;
+            let p_right = 2.0 * (a * b + (a + b) * dr) * inv_sa;
+            let cost_l = params.split_cost(p_left, p_right, n_left + n_planar, n_right);
+            let cost_r = params.split_cost(p_left, p_right, n_left, n_right + n_planar);
+            let (cost, planar_left) = if cost_l <= cost_r {
+                (cost_l, true)
+            } else {
+                (cost_r, false)
+            };
+            if best.is_none_or(|b| cost < b.cost) {
+                best = Some(SplitChoice {
+                    cost,
+                    axis,
+                    pos,
+                    planar_left,
+                });
+            }
+        }
+        n_left += starting + n_planar;
+    }
+    best
+}
+
+/// Triangle clipped to a box (Sutherland & Hodgman 1974, one plane at a time),
+/// returned as the bounds of the clipped polygon, or the triangle's bounds
+/// when it lies inside. The intersection points carry rounding error, so
+/// their coordinates are widened by a few ulps and the result clamped to both
+/// the cell and the triangle's bounds: conservative, and exact for untouched
+/// coordinates (a triangle lying in an axis plane stays planar).
+pub fn clip_triangle(p: [Vec3A; 3], cell: &Aabb) -> Aabb {
+    let tri = Aabb::from_points(p);
+    if tri.min.cmpge(cell.min).all() && tri.max.cmple(cell.max).all() {
+        return tri;
+    }
+    // Vertices with a flag: true for the triangle's own (exact) corners,
+    // false for computed intersection points.
+    let mut poly = [(Vec3A::ZERO, true); 9];
+    let mut next = [(Vec3A::ZERO, true); 9];
+    for (slot, &v) in poly.iter_mut().zip(&p) {
+        *slot = (v, true);
+    }
+    let mut len = 3;
+    for axis in 0..3 {
+        for (plane, keep_above) in [(cell.min[axis], true), (cell.max[axis], false)] {
+            let outside_exists = if keep_above {
+                tri.min[axis] < plane
+            } else {
+                tri.max[axis] > plane
+            };
+            if !outside_exists || len == 0 {
+                continue;
+            }
+            let inside = |v: Vec3A| if keep_above { v[axis] >= plane } else { v[axis] <= plane };
+            let mut out = 0;
+            for i in 0..len {
+                let a = poly[i];
+                let b = poly[(i + 1) % len];
+                let (ina, inb) = (inside(a.0), inside(b.0));
+                if ina {
+                    next[out] = a;
+                    out += 1;
+                }
+                if ina != inb {
+                    let t = (plane - a.0[axis]) / (b.0[axis] - a.0[axis]);
+                    let mut x = a.0 + (b.0 - a.0) * t;
+                    x[axis] = plane;
+                    next[out] = (x, false);
+                    out += 1;
+                }
+            }
+            // A convex polygon cut by a plane gains at most one vertex: out ≤ 9.
+            len = out;
+            poly[..len].copy_from_slice(&next[..len]);
+        }
+    }
+    let fallback = tri.intersection(*cell);
+    if len == 0 {
+        return fallback;
+    }
+    // Only computed points are widened: a corner lying on a later split
+    // plane keeps its exact coordinate, so the triangle is not duplicated.
+    let err = tri.min.abs().max(tri.max.abs()) * (32.0 * f32::EPSILON);
+    let b = poly[..len].iter().fold(Aabb::EMPTY, |b, &(v, exact)| {
+        if exact {
+            b.grow(v)
+        } else {
+            b.union(Aabb::new(v - err, v + err))
+        }
+    });
+    b.intersection(fallback)
+}
+
+/// Reused per-thread buffers of the split step (no allocation per node for them).
+#[derive(Default)]
+struct Scratch {
+    side: Vec<u8>,
+    left_index: Vec<u32>,
+    right_index: Vec<u32>,
+    new_left: [Vec<u64>; 3],
+    new_right: [Vec<u64>; 3],
+}
+
+const BOTH: u8 = 0;
+const LEFT_ONLY: u8 = 1;
+const RIGHT_ONLY: u8 = 2;
+
+/// A node under construction: its cell, its primitives (global indices,
+/// ascending; the position in this list is the local index used by the
+/// events) and one sorted event list per axis.
+struct NodeWork {
+    cell: Aabb,
+    prims: Vec<u32>,
+    events: [Vec<u64>; 3],
+}
+
+/// Nodes and primitive lists of a (sub)tree.
+#[derive(Default)]
+struct Output {
+    nodes: Vec<KdNode>,
+    prim_indices: Vec<u32>,
+}
+
+impl Output {
+    fn push_leaf(&mut self, prims: &[u32]) {
+        match prims {
+            [] => self.nodes.push(KdNode::leaf(0, 0)),
+            [one] => self.nodes.push(KdNode::leaf(1, *one)),
+            _ => {
+                self.nodes
+                    .push(KdNode::leaf(prims.len(), self.prim_indices.len() as u32));
+                self.prim_indices.extend_from_slice(prims);
+            }
+        }
+    }
+
+    fn append(&mut self, sub: Output) {
+        let (node_base, prim_base) = (self.nodes.len(), self.prim_indices.len());
+        self.nodes
+            .extend(sub.nodes.into_iter().map(|n| n.rebased(node_base, prim_base)));
+        self.prim_indices.extend(sub.prim_indices);
+    }
+}
+
+/// Nodes with more primitives than this build their children in parallel.
+const PARALLEL_MIN_PRIMS: usize = 4096;
+
+/// Node sizes above which the three axes are swept in parallel.
+const PARALLEL_SWEEP_MIN_PRIMS: usize = 65_536;
+
+struct Builder<'a, P: Primitives> {
+    prims: &'a P,
+    params: SahParams,
+    max_depth: u32,
+}
+
+/// Builds a SAH KD-tree over `prims`.
+///
+/// Primitive and node counts are limited to 2^30 − 1 by the 8-byte node
+/// layout; callers split larger inputs (meshes are far below it in practice:
+/// 2^30 triangles would hold 12 GiB of indices alone).
+pub(crate) fn build_tree<P: Primitives>(prims: &P, params: &SahParams) -> KdTree {
+    let n = prims.count();
+    let mut tree = KdTree::default();
+    if n == 0 {
+        return tree;
+    }
+    assert!(n <= MAX_INDEX, "KD-tree input of {n} primitives exceeds 2^30 - 1");
+    let bounds: Vec<Aabb> = (0..n as u32).into_par_iter().map(|i| prims.bounds(i)).collect();
+    let cell = bounds.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
+    let events: Vec<Vec<u64>> = (0..3)
+        .into_par_iter()
+        .map(|axis| {
+            let mut list = Vec::with_capacity(2 * n);
+            for (i, b) in bounds.iter().enumerate() {
+                let (lo, hi) = (b.min[axis], b.max[axis]);
+                if lo == hi {
+                    list.push(event(lo, PLANAR, i as u32));
+                } else {
+                    list.push(event(lo, START, i as u32));
+                    list.push(event(hi, END, i as u32));
+                }
+            }
+            list.par_sort_unstable();
+            list
+        })
+        .collect();
+    drop(bounds);
+    let mut events = events.into_iter();
+    let work = NodeWork {
+        cell,
+        prims: (0..n as u32).collect(),
+        events: [events.next().unwrap(), events.next().unwrap(), events.next().unwrap()],
+    };
+    let builder = Builder {
+        prims,
+        params: *params,
+        max_depth: params.depth_limit(n),
+    };
+    let mut out = Output::default();
+    builder.build_node(work, 0, &mut out, &mut Scratch::default());
+    tree.nodes = out.nodes;
+    tree.prim_indices = out.prim_indices;
+    tree.bounds = cell;
+    tree
+}
+
+impl<P: Primitives> Builder<'_, P> {
+    fn find_split(&self, work: &NodeWork) -> Option<SplitChoice> {
+        let n = work.prims.len();
+        let sweep = |axis: usize| sweep_axis(&self.params, &work.cell, axis, &work.events[axis], n);
+        let per_axis: Vec<Option<SplitChoice>> = if n >= PARALLEL_SWEEP_MIN_PRIMS {
+            (0..3).into_par_iter().map(sweep).collect()
+        } else {
+            (0..3).map(sweep).collect()
+        };
+        // Lowest cost; ties go to the lower axis (fixed order: deterministic).
+        per_axis
+            .into_iter()
+            .flatten()
+            .fold(None, |best: Option<SplitChoice>, c| match best {
+                Some(b) if b.cost <= c.cost => Some(b),
+                _ => Some(c),
+            })
+    }
+
+    fn build_node(&self, work: NodeWork, depth: u32, out: &mut Output, scratch: &mut Scratch) {
+        let n = work.prims.len();
+        let split = if n <= self.params.leaf_size || depth >= self.max_depth {
+            None
+        } else {
+            self.find_split(&work).filter(|s| s.cost < self.params.leaf_cost(n))
+        };
+        let Some(split) = split else {
+            out.push_leaf(&work.prims);
+            return;
+        };
+        let (left, right) = self.split_node(work, &split, scratch);
+        let index = out.nodes.len();
+        out.nodes.push(KdNode::interior(split.axis, split.pos));
+        if n >= PARALLEL_MIN_PRIMS {
+            let (left_out, right_out) = rayon::join(
+                || {
+                    let mut o = Output::default();
+                    self.build_node(left, depth + 1, &mut o, &mut Scratch::default());
+                    o
+                },
+                || {
+                    let mut o = Output::default();
+                    self.build_node(right, depth + 1, &mut o, &mut Scratch::default());
+                    o
+                },
+            );
+            out.append(left_out);
+            let above = out.nodes.len();
+            out.nodes[index].set_above(above);
+            out.append(right_out);
+        } else {
+            self.build_node(left, depth + 1, out, scratch);
+            let above = out.nodes.len();
+            out.nodes[index].set_above(above);
+            self.build_node(right, depth + 1, out, scratch);
+        }
+    }
+
+    /// Wald & Havran §4.3: classify, filter, clip the straddlers, merge.
+    fn split_node(&self, work: NodeWork, split: &SplitChoice, s: &mut Scratch) -> (NodeWork, NodeWork) {
+        let n = work.prims.len();
+        let (axis, pos_key) = (split.axis, order_key(split.pos));
+        s.side.clear();
+        s.side.resize(n, BOTH);
+        for &e in &work.events[axis] {
+            let key = event_key(e);
+            let i = event_index(e);
+            match event_kind(e) {
+                END if key <= pos_key => s.side[i] = LEFT_ONLY,
+                START if key >= pos_key => s.side[i] = RIGHT_ONLY,
+                PLANAR => {
+                    s.side[i] = if key < pos_key || (key == pos_key && split.planar_left) {
+                        LEFT_ONLY
+                    } else {
+                        RIGHT_ONLY
+                    }
+                }
+                _ => {}
+            }
+        }
+        let mut left_cell = work.cell;
+        let mut right_cell = work.cell;
+        left_cell.max[axis] = split.pos;
+        right_cell.min[axis] = split.pos;
+
+        s.left_index.clear();
+        s.left_index.resize(n, u32::MAX);
+        s.right_index.clear();
+        s.right_index.resize(n, u32::MAX);
+        let both = s.side.iter().filter(|&&x| x == BOTH).count();
+        let lefts = s.side.iter().filter(|&&x| x == LEFT_ONLY).count() + both;
+        let mut left_prims = Vec::with_capacity(lefts);
+        let mut right_prims = Vec::with_capacity(n - lefts + 2 * both);
+        for (i, &prim) in work.prims.iter().enumerate() {
+            if s.side[i] != RIGHT_ONLY {
+                s.left_index[i] = left_prims.len() as u32;
+                left_prims.push(prim);
+            }
+            if s.side[i] != LEFT_ONLY {
+                s.right_index[i] = right_prims.len() as u32;
+                right_prims.push(prim);
+            }
+        }
+        for k in 0..3 {
+            s.new_left[k].clear();
+            s.new_right[k].clear();
+        }
+        if both > 0 {
+            for (i, &prim) in work.prims.iter().enumerate() {
+                if s.side[i] == BOTH {
+                    let lb = self.prims.clipped_bounds(prim, &left_cell);
+                    push_events(&mut s.new_left, &lb, s.left_index[i]);
+                    let rb = self.prims.clipped_bounds(prim, &right_cell);
+                    push_events(&mut s.new_right, &rb, s.right_index[i]);
+                }
+            }
+            for k in 0..3 {
+                s.new_left[k].sort_unstable();
+                s.new_right[k].sort_unstable();
+            }
+        }
+        let NodeWork { events, .. } = work;
+        let mut left_events: [Vec<u64>; 3] = Default::default();
+        let mut right_events: [Vec<u64>; 3] = Default::default();
+        for (k, parent) in events.into_iter().enumerate() {
+            let (l, r) = merge_children(&parent, s, k);
+            left_events[k] = l;
+            right_events[k] = r;
+        }
+        (
+            NodeWork {
+                cell: left_cell,
+                prims: left_prims,
+                events: left_events,
+            },
+            NodeWork {
+                cell: right_cell,
+                prims: right_prims,
+                events: right_events,
+            },
+        )
+    }
+}
+
+/// One pass over a parent's sorted event list: one-sided primitives' events
+/// are renumbered (the renumbering keeps their order) and merged with the
+/// sorted events of the clipped straddlers.
+fn merge_children(parent: &[u64], s: &Scratch, axis: usize) -> (Vec<u64>, Vec<u64>) {
+    let new_l = &s.new_left[axis];
+    let new_r = &s.new_right[axis];
+    let mut left = Vec::with_capacity(parent.len() + new_l.len());
+    let mut right = Vec::with_capacity(parent.len() + new_r.len());
+    let (mut li, mut ri) = (0, 0);
+    for &e in parent {
+        let i = event_index(e);
+        match s.side[i] {
+            LEFT_ONLY => {
+                let e = with_index(e, s.left_index[i]);
+                while li < new_l.len() && new_l[li] < e {
+                    left.push(new_l[li]);
+                    li += 1;
+                }
+                left.push(e);
+            }
+            RIGHT_ONLY => {
+                let e = with_index(e, s.right_index[i]);
+                while ri < new_r.len() && new_r[ri] < e {
+                    right.push(new_r[ri]);
+                    ri += 1;
+                }
+                right.push(e);
+            }
+            _ => {}
+        }
+    }
+    left.extend_from_slice(&new_l[li..]);
+    right.extend_from_slice(&new_r[ri..]);
+    left.shrink_to_fit();
+    right.shrink_to_fit();
+    (left, right)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Boxes as primitives (clipping = intersection).
+    struct Boxes(Vec<Aabb>);
+    impl Primitives for Boxes {
+        fn count(&self) -> usize {
+            self.0.len()
+        }
+        fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
+            self.0[i as usize].intersection(*cell)
+        }
+        fn bounds(&self, i: u32) -> Aabb {
+            self.0[i as usize]
+        }
+    }
+
+    fn unit_box(x: f32) -> Aabb {
+        Aabb::new(Vec3A::new(x, 0.0, 0.0), Vec3A::new(x + 1.0, 1.0, 1.0))
+    }
+
+    #[test]
+    fn order_key_sorts_like_floats() {
+        let xs = [-1e30, -2.5, -0.0, 0.0, 1e-40, 1.0, 3.5, f32::MAX];
+        for w in xs.windows(2) {
+            assert!(order_key(w[0]) <= order_key(w[1]), "{w:?}");
+            assert_eq!(from_order_key(order_key(w[1])), w[1]);
+        }
+        assert_eq!(order_key(-0.0), order_key(0.0));
+        // Kind orders events at one position: end < planar < start.
+        assert!(event(1.0, END, 9) < event(1.0, PLANAR, 0));
+        assert!(event(1.0, PLANAR, 9) < event(1.0, START, 0));
+        assert!(event(1.0, START, 9) < event(1.5, END, 0));
+        let e = event(-3.25, START, 77);
+        assert_eq!(
+            (event_index(e), event_kind(e), from_order_key(event_key(e))),
+            (77, START, -3.25)
+        );
+    }
+
+    #[test]
+    fn split_cost_follows_wald_havran() {
+        let p = SahParams::default();
+        // Both sides used: no bonus.
+        assert_eq!(p.split_cost(0.5, 0.5, 10, 10), 15.0 + 20.0 * 10.0);
+        // An empty side gets the 0.8 factor.
+        assert_eq!(p.split_cost(0.3, 0.7, 0, 10), 0.8 * (15.0 + 20.0 * 7.0));
+        assert_eq!(p.leaf_cost(4), 80.0);
+        assert_eq!(p.depth_limit(1 << 20), 34);
+        assert_eq!(p.depth_limit(usize::MAX), MAX_TREE_DEPTH);
+    }
+
+    fn events_of(boxes: &[Aabb], axis: usize) -> Vec<u64> {
+        let mut ev: [Vec<u64>; 3] = Default::default();
+        for (i, b) in boxes.iter().enumerate() {
+            push_events(&mut ev, b, i as u32);
+        }
+        let mut e = std::mem::take(&mut ev[axis]);
+        e.sort_unstable();
+        e
+    }
+
+    #[test]
+    fn sweep_separates_two_clusters() {
+        // Two clusters of boxes at x ∈ [0, 2] and [8, 10]: the best x plane
+        // lies in the gap, at one of its ends (the empty space is cut off).
+        let boxes: Vec<Aabb> = [0.0, 1.0, 8.0, 9.0].iter().map(|&x| unit_box(x)).collect();
+        let cell = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let best = sweep_axis(&SahParams::default(), &cell, 0, &events_of(&boxes, 0), 4).unwrap();
+        assert!(best.pos == 2.0 || best.pos == 8.0, "{best:?}");
+        // No plane on y/z: every candidate lies on the cell's faces.
+        assert!(sweep_axis(&SahParams::default(), &cell, 1, &events_of(&boxes, 1), 4).is_none());
+    }
+
+    #[test]
+    fn sweep_counts_planar_primitives() {
+        // Many flat boxes in the plane x = 5 plus one big box: planar ones are
+        // put on the side that makes the cost lowest, and the counts match a
+        // direct evaluation.
+        let mut boxes = vec![Aabb::new(Vec3A::ZERO, Vec3A::new(10.0, 1.0, 1.0))];
+        for _ in 0..5 {
+            boxes.push(Aabb::new(Vec3A::new(5.0, 0.0, 0.0), Vec3A::new(5.0, 1.0, 1.0)));
+        }
+        let cell = boxes[0];
+        let params = SahParams::default();
+        let best = sweep_axis(&params, &cell, 0, &events_of(&boxes, 0), 6).unwrap();
+        assert_eq!(best.pos, 5.0);
+        let sa = cell.surface_area();
+        let half = Aabb::new(Vec3A::ZERO, Vec3A::new(5.0, 1.0, 1.0)).surface_area() / sa;
+        // Big box straddles (counted both sides), 5 planar on one side.
+        assert_eq!(best.cost, params.split_cost(half, half, 6, 1));
+    }
+
+    #[test]
+    fn clip_keeps_inside_triangles_and_planar_ones_exact() {
+        let cell = Aabb::new(Vec3A::splat(-1.0), Vec3A::splat(1.0));
+        let inside = [
+            Vec3A::new(0.0, 0.0, 0.0),
+            Vec3A::new(0.5, 0.0, 0.0),
+            Vec3A::new(0.0, 0.5, 0.25),
+        ];
+        assert_eq!(clip_triangle(inside, &cell), Aabb::from_points(inside));
+        // A large triangle in the plane z = 0.5 across the cell.
+        let big = [
+            Vec3A::new(-10.0, -10.0, 0.5),
+            Vec3A::new(10.0, -10.0, 0.5),
+            Vec3A::new(0.0, 10.0, 0.5),
+        ];
+        let b = clip_triangle(big, &cell);
+        assert_eq!((b.min.z, b.max.z), (0.5, 0.5));
+        assert_eq!((b.min.x, b.max.x, b.min.y, b.max.y), (-1.0, 1.0, -1.0, 1.0));
+    }
+
+    #[test]
+    fn clip_is_tight_and_conservative() {
+        // Triangle (0,0,0) (4,0,0) (0,4,0) clipped to x ≥ 3 keeps the corner
+        // x ∈ [3, 4], y ∈ [0, 1]: much tighter than the triangle's bounds.
+        let t = [Vec3A::ZERO, Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 4.0, 0.0)];
+        let cell = Aabb::new(Vec3A::new(3.0, -1.0, -1.0), Vec3A::new(5.0, 5.0, 1.0));
+        let b = clip_triangle(t, &cell);
+        assert_eq!((b.min.x, b.max.x, b.min.y, b.min.z, b.max.z), (3.0, 4.0, 0.0, 0.0, 0.0));
+        assert!(b.max.y >= 1.0 && b.max.y < 1.0 + 1e-4, "{b:?}");
+        // A triangle outside the cell (touching nothing) clips to nothing.
+        let far = Aabb::new(Vec3A::splat(10.0), Vec3A::splat(11.0));
+        assert!(clip_triangle(t, &far).is_empty());
+    }
+
+    /// Random boxes; every point of every box must be in a leaf listing it.
+    #[test]
+    fn every_primitive_is_in_every_leaf_it_overlaps() {
+        use crate::math::rng::{Domain, Rng};
+        let mut rng = Rng::new(5, Domain::Analysis, 0, 0);
+        let boxes: Vec<Aabb> = (0..3000)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+                let e = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.3;
+                Aabb::new(c - e, c + e)
+            })
+            .collect();
+        let prims = Boxes(boxes.clone());
+        let tree = build_tree(&prims, &SahParams::default());
+        assert!(tree.nodes.len() > 100);
+        for (i, b) in boxes.iter().enumerate() {
+            for _ in 0..8 {
+                let p = b.min + b.extent() * Vec3A::new(rng.f32(), rng.f32(), rng.f32());
+                // Descend to every leaf containing p (both sides on a plane).
+                let mut stack = vec![0usize];
+                let mut found = false;
+                while let Some(index) = stack.pop() {
+                    let node = tree.nodes[index];
+                    if node.is_leaf() {
+                        let list: Vec<u32> = if node.count() == 1 {
+                            vec![node.data()]
+                        } else {
+                            tree.prim_indices[node.data() as usize..][..node.count()].to_vec()
+                        };
+                        assert!(list.windows(2).all(|w| w[0] < w[1]), "leaf lists ascend");
+                        found |= list.contains(&(i as u32));
+                        assert!(found, "box {i} missing from a leaf holding {p}");
+                        found = false;
+                        continue;
+                    }
+                    let (axis, split) = (node.axis(), node.split());
+                    if p[axis] <= split {
+                        stack.push(index + 1);
+                    }
+                    if p[axis] >= split {
+                        stack.push(node.above());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn build_is_identical_for_any_thread_count() {
+        use crate::math::rng::{Domain, Rng};
+        let mut rng = Rng::new(6, Domain::Analysis, 0, 0);
+        let boxes: Vec<Aabb> = (0..20_000)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 100.0;
+                Aabb::new(c, c + Vec3A::splat(0.5))
+            })
+            .collect();
+        let prims = Boxes(boxes);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let a = one.install(|| build_tree(&prims, &SahParams::default()));
+        let b = three.install(|| build_tree(&prims, &SahParams::default()));
+        assert_eq!(a.nodes, b.nodes);
+        assert_eq!(a.prim_indices, b.prim_indices);
+    }
+}
