@@ -127,7 +127,7 @@ fn every_scene_file_crosschecks() {
                     seed: scene.settings.seed,
                 },
             );
-            assert_clean(&name, &report);
+            assert_clean(&format!("{name}: {} vs {}", report.a_name, report.b_name), &report);
             assert_eq!(report.total().rays, RAYS);
             checked += 1;
         }

@@ -241,6 +241,43 @@ pub struct Comparison {
     pub occlusion: OcclusionComparison,
 }
 
+impl fmt::Display for Verdict {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Verdict::Agree => write!(f, "agree"),
+            Verdict::Tie(reason) => write!(f, "tie ({})", reason.name()),
+            Verdict::Disagree(why) => write!(f, "DISAGREE: {why}"),
+        }
+    }
+}
+
+impl Comparison {
+    /// Both queries in words, hits named after the scene's objects, numbers
+    /// at full precision (what `caustic crosscheck --replay` prints).
+    pub fn describe(&self, scene: &Scene) -> String {
+        let c = &self.closest;
+        let o = &self.occlusion;
+        format!(
+            "ray \"{}\"\nclosest: a: {}; b: {}\n  {}\noccluded: a: {}; b: {}{}\n  {}",
+            format_ray(&self.ray, c.t_max),
+            describe(scene, c.a.as_ref()),
+            describe(scene, c.b.as_ref()),
+            c.verdict,
+            o.a,
+            o.b,
+            o.blocker
+                .map(|h| format!("; blocker: {}", describe(scene, Some(&h))))
+                .unwrap_or_default(),
+            o.verdict
+        )
+    }
+
+    /// True when neither query disagrees.
+    pub fn is_ok(&self) -> bool {
+        !matches!(self.closest.verdict, Verdict::Disagree(_)) && !matches!(self.occlusion.verdict, Verdict::Disagree(_))
+    }
+}
+
 /// Which query disagreed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Query {
@@ -1358,6 +1395,9 @@ mod tests {
             assert_eq!(d.query, Query::Closest);
             let again = compare_one(&scene, &good, &wrong, &ray, t_max);
             assert!(matches!(again.closest.verdict, Verdict::Disagree(_)), "{again:?}");
+            assert!(!again.is_ok());
+            let text = again.describe(&scene);
+            assert!(text.contains(&replay) && text.contains("DISAGREE"), "{text}");
         }
     }
 
