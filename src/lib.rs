@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod analysis;
 pub mod film;
 pub mod integrator;
 pub mod io;
