@@ -26,6 +26,9 @@ enum Command {
     Render(RenderArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
+    /// Cast seeded rays through two accelerators (default Embree and the
+    /// KD-tree) and compare every hit; exit 1 on any disagreement that is not a tie.
+    Crosscheck(CrosscheckArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -143,6 +146,34 @@ struct InfoArgs {
     accel: AccelArgs,
 }
 
+#[derive(Args)]
+struct CrosscheckArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Number of rays (a quarter each: camera, through the bounds, at mesh vertices and edges, shadow).
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: u64,
+    /// Seed of the ray streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// First accelerator.
+    #[arg(long, value_enum, default_value = DEFAULT_A)]
+    a: AccelArg,
+    /// Second accelerator.
+    #[arg(long, value_enum, default_value = "kdtree")]
+    b: AccelArg,
+    /// Replay one printed ray ("ox,oy,oz,dx,dy,dz[,t_max]") instead of casting seeded rays.
+    #[arg(long)]
+    replay: Option<String>,
+    #[command(flatten)]
+    accel: AccelArgs,
+}
+
+#[cfg(feature = "embree")]
+const DEFAULT_A: &str = "embree";
+#[cfg(not(feature = "embree"))]
+const DEFAULT_A: &str = "brute";
+
 /// An error with its exit code.
 struct Failure {
     code: u8,
@@ -171,6 +202,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Info(args) => run_info(args),
+        Command::Crosscheck(args) => run_crosscheck(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -337,6 +369,57 @@ fn run_info(args: InfoArgs) -> Result<(), Failure> {
     for (k, v) in &s.details {
         println!("            {k}: {v}");
     }
+    if let Some(peak) = caustic::analysis::memory::peak_rss_bytes() {
+        println!(
+            "peak memory {:.1} MiB resident (scene + accelerator)",
+            peak as f64 / (1u64 << 20) as f64
+        );
+    }
     println!("{}", RenderPlan::new(&scene));
     Ok(())
+}
+
+fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
+    use caustic::analysis::crosscheck::{compare_one, crosscheck, parse_ray, CrosscheckOptions};
+    let mut scene = load(&args.scene)?;
+    args.accel.apply(&mut scene);
+    let options = args.accel.options(&scene);
+    let a = accel::build(&scene, args.a.into(), &options)?;
+    let b = accel::build(&scene, args.b.into(), &options)?;
+    let (sa, sb) = (a.stats(), b.stats());
+    println!(
+        "crosscheck {}: {} (built in {:.3} s) vs {} (built in {:.3} s)",
+        args.scene.display(),
+        sa.name,
+        sa.build_time.as_secs_f64(),
+        sb.name,
+        sb.build_time.as_secs_f64()
+    );
+    if let Some(text) = &args.replay {
+        let (ray, t_max) = parse_ray(text).map_err(bad_input)?;
+        let c = compare_one(&scene, a.as_ref(), b.as_ref(), &ray, t_max);
+        println!("{}", c.describe(&scene));
+        return if c.is_ok() {
+            Ok(())
+        } else {
+            Err(anyhow::anyhow!("the accelerators disagree on this ray").into())
+        };
+    }
+    let start = Instant::now();
+    let report = crosscheck(
+        &scene,
+        a.as_ref(),
+        b.as_ref(),
+        &CrosscheckOptions {
+            rays: args.rays,
+            seed: args.seed,
+        },
+    );
+    println!("{report}");
+    println!("{} rays in {:.2} s", args.rays, start.elapsed().as_secs_f64());
+    if report.is_ok() {
+        Ok(())
+    } else {
+        Err(anyhow::anyhow!("{} disagreement(s) that are not ties", report.disagreement_count()).into())
+    }
 }

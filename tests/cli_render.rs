@@ -57,7 +57,13 @@ fn luminance(c: [f32; 3]) -> f32 {
 }
 
 fn render(scene: &Path, out: &Path, extra: &[&str]) -> (image::RgbImage, Output) {
-    let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"];
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
     args.extend_from_slice(extra);
     let o = caustic(&args);
     assert!(o.status.success(), "render failed: {}", stderr(&o));
@@ -81,14 +87,24 @@ fn cornell_walls_are_red_and_green_with_every_accelerator() {
     }
     for accel in kinds {
         let out = dir.path().join(format!("cornell-{accel}.png"));
-        let (img, o) = render(&scene_path, &out, &["--width", "192", "--height", "108", "--spp", "2", "--accel", accel]);
+        let (img, o) = render(
+            &scene_path,
+            &out,
+            &["--width", "192", "--height", "108", "--spp", "2", "--accel", accel],
+        );
         assert_eq!((img.width(), img.height()), (w, h));
         let (rx, ry) = project(&cam, Vec3A::new(-2.5, 3.0, 0.5), w, h);
         let red = mean_rgb(&img, rx, ry);
-        assert!(red[0] > 2.0 * red[1] && red[0] > 2.0 * red[2] && red[0] > 40.0, "{accel}: left wall {red:?}");
+        assert!(
+            red[0] > 2.0 * red[1] && red[0] > 2.0 * red[2] && red[0] > 40.0,
+            "{accel}: left wall {red:?}"
+        );
         let (gx, gy) = project(&cam, Vec3A::new(2.5, 3.0, 0.5), w, h);
         let green = mean_rgb(&img, gx, gy);
-        assert!(green[1] > 1.5 * green[0] && green[1] > 1.5 * green[2] && green[1] > 30.0, "{accel}: right wall {green:?}");
+        assert!(
+            green[1] > 1.5 * green[0] && green[1] > 1.5 * green[2] && green[1] > 30.0,
+            "{accel}: right wall {green:?}"
+        );
         // The summary reports rays and throughput.
         let s = stdout(&o);
         assert!(s.contains("Mrays/s") && s.contains("written:"), "{s}");
@@ -154,11 +170,18 @@ material = "red"
     for mirror in [true, false] {
         let path = dir.path().join(format!("mirror-{mirror}.toml"));
         std::fs::write(&path, scene(mirror)).unwrap();
-        let (img, _) = render(&path, &dir.path().join(format!("mirror-{mirror}.png")), &["--accel", "kdtree"]);
+        let (img, _) = render(
+            &path,
+            &dir.path().join(format!("mirror-{mirror}.png")),
+            &["--accel", "kdtree"],
+        );
         centre.push(mean_rgb(&img, 32, 32));
     }
     let (m, d) = (centre[0], centre[1]);
-    assert!(m[0] > 3.0 * m[1] && m[0] > 60.0, "mirror centre {m:?} should show the red ball");
+    assert!(
+        m[0] > 3.0 * m[1] && m[0] > 60.0,
+        "mirror centre {m:?} should show the red ball"
+    );
     assert!(d[0] < 1.5 * d[1], "diffuse centre {d:?} should be grey");
 }
 
@@ -166,7 +189,15 @@ material = "red"
 fn exr_output_is_linear_and_png_is_optional() {
     let dir = tempfile::tempdir().unwrap();
     let exr = dir.path().join("out.exr");
-    let o = caustic(&["render", "scenes/test/shadow.toml", "--exr", exr.to_str().unwrap(), "--quiet", "--accel", "kdtree"]);
+    let o = caustic(&[
+        "render",
+        "scenes/test/shadow.toml",
+        "--exr",
+        exr.to_str().unwrap(),
+        "--quiet",
+        "--accel",
+        "kdtree",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let img = exr::prelude::read_first_rgba_layer_from_file(
         &exr,
@@ -187,7 +218,14 @@ fn info_prints_statistics_build_and_plan() {
     let o = caustic(&["info", "scenes/cornell.toml", "--accel", "kdtree"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let s = stdout(&o);
-    for needle in ["objects", "triangles", "accelerator kdtree", "built in", "render plan", "secondary rays: ran"] {
+    for needle in [
+        "objects",
+        "triangles",
+        "accelerator kdtree",
+        "built in",
+        "render plan",
+        "secondary rays: ran",
+    ] {
         assert!(s.contains(needle), "missing {needle:?} in:\n{s}");
     }
 }
@@ -206,11 +244,26 @@ fn bad_input_exits_2_with_a_clear_message() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("bad.toml:2:9"), "{}", stderr(&o));
     // Absurd overrides are refused before any allocation.
-    let o = caustic(&["render", "scenes/test/shadow.toml", "--width", "60000", "--height", "60000", "--spp", "1000"]);
+    let o = caustic(&[
+        "render",
+        "scenes/test/shadow.toml",
+        "--width",
+        "60000",
+        "--height",
+        "60000",
+        "--spp",
+        "1000",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("GiB"), "{}", stderr(&o));
     // An unwritable output is reported before rendering.
-    let o = caustic(&["render", "scenes/test/shadow.toml", "-o", "/nonexistent-dir/x.png", "--quiet"]);
+    let o = caustic(&[
+        "render",
+        "scenes/test/shadow.toml",
+        "-o",
+        "/nonexistent-dir/x.png",
+        "--quiet",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("/nonexistent-dir"), "{}", stderr(&o));
     assert!(stdout(&o).is_empty(), "nothing was rendered: {}", stdout(&o));

@@ -181,7 +181,7 @@ pub enum SceneError {
         /// The object's name.
         object: String,
         /// The mesh loader's error (names the mesh file and the place in it).
-        error: MeshError,
+        error: Box<MeshError>,
     },
 }
 
@@ -908,7 +908,7 @@ impl Ctx<'_> {
             path: self.path.into(),
             place: self.place(file.span()),
             object: objects[object].name.clone(),
-            error,
+            error: Box::new(error),
         };
         // Distinct files in order of first use; `first_user` reports errors
         // at the first object that names the file.
