@@ -1,6 +1,7 @@
 //! Triangle meshes in object space, shared by `Arc` between the objects that use them.
 
 use crate::math::{Aabb, Vec3, Vec3A};
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// A triangle mesh with per-vertex normals (computed when the file has none).
@@ -102,21 +103,36 @@ impl Mesh {
     /// (Thürmer & Wüthrich 1998): independent of how faces are tessellated.
     /// Vertices with no (non-degenerate) face get +z.
     pub fn angle_weighted_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+        // The corner weights (the costly part: three angles per face) in
+        // parallel; the scatter into vertices stays serial and in face order,
+        // so the sums do not depend on the number of threads.
+        let corners: Vec<[Vec3; 3]> = triangles
+            .par_iter()
+            .map(|tri| {
+                let p = tri.map(|i| positions[i as usize]);
+                let Some(n) = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() else {
+                    return [Vec3::ZERO; 3];
+                };
+                std::array::from_fn(|k| {
+                    let e1 = (p[(k + 1) % 3] - p[k]).try_normalize();
+                    let e2 = (p[(k + 2) % 3] - p[k]).try_normalize();
+                    match (e1, e2) {
+                        // atan2(|e1×e2|, e1·e2) is the corner angle, accurate near 0 and π.
+                        (Some(e1), Some(e2)) => n * e1.cross(e2).length().atan2(e1.dot(e2)),
+                        _ => Vec3::ZERO,
+                    }
+                })
+            })
+            .collect();
         let mut acc = vec![Vec3::ZERO; positions.len()];
-        for tri in triangles {
-            let p = tri.map(|i| positions[i as usize]);
-            let n = (p[1] - p[0]).cross(p[2] - p[0]);
-            let Some(n) = n.try_normalize() else { continue };
+        for (tri, w) in triangles.iter().zip(&corners) {
             for k in 0..3 {
-                let e1 = (p[(k + 1) % 3] - p[k]).try_normalize();
-                let e2 = (p[(k + 2) % 3] - p[k]).try_normalize();
-                if let (Some(e1), Some(e2)) = (e1, e2) {
-                    let angle = e1.dot(e2).clamp(-1.0, 1.0).acos();
-                    acc[tri[k] as usize] += n * angle;
-                }
+                acc[tri[k] as usize] += w[k];
             }
         }
-        acc.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Z)).collect()
+        acc.into_par_iter()
+            .map(|n| n.try_normalize().unwrap_or(Vec3::Z))
+            .collect()
     }
 
     /// The three corners of triangle `i`.
