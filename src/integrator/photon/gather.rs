@@ -12,7 +12,7 @@
 //! farthest photon's distance when fewer than `k` exist would divide one
 //! lone photon by a tiny area, a firefly.
 
-use super::map::PhotonMap;
+use super::map::{to_tree, PhotonMap};
 use crate::math::Vec3A;
 use kiddo::SquaredEuclidean;
 use std::f32::consts::PI;
@@ -50,9 +50,12 @@ impl PhotonMap {
         if self.is_empty() {
             return Vec3A::ZERO;
         }
-        let found =
-            self.tree
-                .nearest_n_within::<SquaredEuclidean>(&p.to_array(), g.max_radius * g.max_radius, g.k, false);
+        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
+            &to_tree(&self.rotation, p),
+            g.max_radius * g.max_radius,
+            g.k,
+            false,
+        );
         if found.is_empty() {
             return Vec3A::ZERO;
         }

@@ -19,8 +19,25 @@
 //! is built, kiddo also holds the source positions (12 B) and a sort index
 //! (8 B, `usize`): the peak is [`PEAK_BYTES_PER_PHOTON`].
 
-use crate::math::{Aabb, Vec3A};
+use crate::math::{Aabb, Mat3A, Vec3A};
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
+
+/// The tree stores positions rotated by this fixed rotation (queries are
+/// rotated alike; distances, hence the k nearest, are unchanged). Why:
+/// kiddo's immutable tree splits on x, y, z in turn at the median and moves
+/// the split off runs of equal values, so photons on an axis-aligned floor
+/// (all `y = 0`) would make every `y` split degenerate: a lopsided tree,
+/// minutes to build and slow to query. No scene plane is aligned with the
+/// rotated axes in practice.
+pub fn tree_rotation() -> Mat3A {
+    Mat3A::from_quat(glam::Quat::from_xyzw(0.31, 0.52, 0.17, 0.78).normalize())
+}
+
+/// `p` in the tree's (rotated) coordinates.
+#[inline]
+pub fn to_tree(rotation: &Mat3A, p: Vec3A) -> [f32; 3] {
+    (*rotation * p).to_array()
+}
 
 /// Points per leaf of the k-d tree.
 pub const BUCKET: usize = 32;
@@ -152,6 +169,7 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
 /// The photon map.
 pub struct PhotonMap {
     pub(super) tree: PhotonTree,
+    pub(super) rotation: Mat3A,
     pub(super) records: Vec<PhotonRecord>,
     coarse: Vec<[u16; 3]>,
     bounds: Aabb,
@@ -193,10 +211,16 @@ impl PhotonMap {
                 [q.x as u16, q.y as u16, q.z as u16]
             })
             .collect();
+        let rotation = tree_rotation();
+        let mut positions = positions;
+        for p in &mut positions {
+            *p = to_tree(&rotation, Vec3A::from_array(*p));
+        }
         let tree = PhotonTree::new_from_slice(&positions);
         drop(positions);
         Self {
             tree,
+            rotation,
             records,
             coarse,
             bounds,
