@@ -71,7 +71,7 @@ impl PhotonMap {
         let mut sum = Vec3A::ZERO;
         for nb in &found {
             let rec = self.records[nb.item as usize];
-            if rec.incoming().dot(n) <= 0.0 {
+            if !rec.arrives_from_side_of(n) {
                 continue;
             }
             sum += rec.power() * cone_weight(nb.distance.sqrt(), r, g.cone_k);

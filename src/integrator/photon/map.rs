@@ -93,6 +93,21 @@ impl PhotonRecord {
     pub fn incoming(&self) -> Vec3A {
         decode_octahedral(self.dir)
     }
+
+    /// True when the incoming direction is on the side of `n` (`ω·n > 0`),
+    /// without normalising the decoded direction (the gather's hot path).
+    #[inline]
+    pub fn arrives_from_side_of(&self, n: Vec3A) -> bool {
+        let x = self.dir[0] as f32 / 65535.0 * 2.0 - 1.0;
+        let y = self.dir[1] as f32 / 65535.0 * 2.0 - 1.0;
+        let z = 1.0 - x.abs() - y.abs();
+        let (x, y) = if z < 0.0 {
+            ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
+        } else {
+            (x, y)
+        };
+        n.x * x + n.y * y + n.z * z > 0.0
+    }
 }
 
 /// Ward's RGBE shared-exponent colour (Graphics Gems II, "Real Pixels"),
@@ -130,7 +145,14 @@ pub fn decode_rgbe(rgbe: [u8; 4]) -> Vec3A {
     if rgbe[3] == 0 {
         return Vec3A::ZERO;
     }
-    let f = 2f32.powi(rgbe[3] as i32 - 128) / 256.0;
+    // 2^(e − 128) / 256 = 2^(e − 136), built from its bits (exponent
+    // field e − 136 + 127 ≥ 1 for every stored e ≥ 2; e = 1 underflows to
+    // a subnormal scale, handled by powi).
+    let f = if rgbe[3] >= 10 {
+        f32::from_bits(((rgbe[3] as u32) - 9) << 23)
+    } else {
+        2f32.powi(rgbe[3] as i32 - 136)
+    };
     Vec3A::new(rgbe[0] as f32, rgbe[1] as f32, rgbe[2] as f32) * f
 }
 
@@ -304,6 +326,7 @@ mod tests {
             Vec3A::new(3.7e-7, 1.2e-7, 0.0),
             Vec3A::new(1234.0, 1.0, 900.0),
             Vec3A::splat(0.999),
+            Vec3A::new(1e-36, 0.0, 5e-37),
         ] {
             let d = decode_rgbe(encode_rgbe(c));
             let max = c.max_element();
@@ -321,6 +344,12 @@ mod tests {
             let v = uniform_sphere(Vec2::new(a, b));
             let d = decode_octahedral(encode_octahedral(v));
             assert!(v.cross(d).length() < 1e-4 && v.dot(d) > 0.0, "{v} → {d}");
+            let r = PhotonRecord::new(Vec3A::ONE, v);
+            for n in [Vec3A::X, Vec3A::Y, -Vec3A::Z, Vec3A::new(0.6, -0.8, 0.0)] {
+                if v.dot(n).abs() > 1e-3 {
+                    assert_eq!(r.arrives_from_side_of(n), v.dot(n) > 0.0);
+                }
+            }
         }
         for v in [Vec3A::X, -Vec3A::X, Vec3A::Y, -Vec3A::Y, Vec3A::Z, -Vec3A::Z] {
             assert!(decode_octahedral(encode_octahedral(v)).dot(v) > 0.99999);
