@@ -422,8 +422,13 @@ fn scaled_scene(s: f32) -> Scene {
         }),
         ..Material::diffuse("mirror", Vec3A::splat(0.3))
     };
+    // Without the photon pass: its k-nearest estimate is scale-invariant
+    // only up to rank ties between equidistant photons, and this test is
+    // about the Whitted rays' offsets.
+    let mut settings = settings(48, 48, 1);
+    settings.photons.count = 0;
     Scene {
-        settings: settings(48, 48, 1),
+        settings,
         camera: camera([0.0, 3.0 * s, 3.0 * s], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0),
         materials: vec![Material::diffuse("floor", albedo()), mirror],
         lights: vec![Light::Point {

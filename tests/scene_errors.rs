@@ -79,10 +79,10 @@ fn unknown_key_in_every_table_kind() {
         "unknown field `centre`",
     );
     expect_error(
-        &format!("{CAMERA}[photons]\ncount = 5\n"),
+        &format!("{CAMERA}[photon]\ncount = 5\n"),
         4,
         2,
-        "unknown field `photons`",
+        "unknown field `photon`",
     );
 }
 

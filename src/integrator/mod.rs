@@ -1,10 +1,14 @@
-//! Integrators: the render plan, the Whitted integrator and the tiled,
-//! deterministic render loop.
+//! Integrators: the render plan, the photon pass (caustics), fog, the
+//! Whitted integrator, the tiled deterministic render loop and the debug
+//! overlays.
 
+pub mod debug;
+pub mod fog;
+pub mod photon;
 pub mod plan;
 pub mod render;
 pub mod whitted;
 
 pub use plan::RenderPlan;
-pub use render::{render, RenderOutput, RenderStats};
+pub use render::{render, render_with_photons, RenderOutput, RenderStats};
 pub use whitted::{RayCounts, Whitted};

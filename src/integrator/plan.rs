@@ -3,8 +3,10 @@
 //! ray, a scene without mirrors or glass spawns no secondary rays, sample
 //! spreading only when there are several samples to spread over).
 //!
-//! Later passes (photon map, fog) become further fields here, each with its
-//! own "ran / skipped because ..." line in the `Display` output.
+//! The photon pass runs only when a specular object can cast a caustic (and
+//! photons are emitted only toward those casters); fog only with a medium.
+//! Each pass has its own "ran / skipped because ..." line in the `Display`
+//! output.
 
 use crate::scene::{Light, SampleSharing, Scene};
 use std::fmt;
@@ -64,6 +66,45 @@ pub enum Secondary {
     DepthZero,
 }
 
+/// The photon pass (caustic map).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhotonPlan {
+    /// Photons are emitted, traced and gathered.
+    Run {
+        /// Photons emitted.
+        count: u64,
+        /// Specular objects the emission is restricted to.
+        casters: usize,
+        /// Photons gathered per estimate.
+        k: u32,
+        /// Largest gather radius (resolved: the scene's, or 2% of the
+        /// scene bounds' diagonal).
+        max_radius: f32,
+        /// Cone-filter constant.
+        cone_k: f32,
+    },
+    /// No object is a mirror or dielectric: there is no caustic.
+    NoSpecularCaster,
+    /// No light to emit from.
+    NoLights,
+    /// `max_depth = 0`: no specular bounce is followed.
+    DepthZero,
+    /// `[photons] count = 0`.
+    CountZero,
+}
+
+/// Exponential fog.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FogPlan {
+    /// Applied to camera and secondary rays (and attenuates photons).
+    Run {
+        /// Extinction per unit length.
+        density: f32,
+    },
+    /// The scene has no `[medium]`.
+    NoMedium,
+}
+
 /// What a render will do, computed from the scene by [`RenderPlan::new`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderPlan {
@@ -85,6 +126,10 @@ pub struct RenderPlan {
     pub secondary: Secondary,
     /// Sample sharing.
     pub sharing: Sharing,
+    /// Photon pass.
+    pub photons: PhotonPlan,
+    /// Fog.
+    pub fog: FogPlan,
 }
 
 impl RenderPlan {
@@ -145,6 +190,28 @@ impl RenderPlan {
                 dielectric_objects,
             }
         };
+        let ps = &s.photons;
+        let photons = if specular_objects == 0 {
+            PhotonPlan::NoSpecularCaster
+        } else if scene.lights.is_empty() {
+            PhotonPlan::NoLights
+        } else if s.max_depth == 0 {
+            PhotonPlan::DepthZero
+        } else if ps.count == 0 {
+            PhotonPlan::CountZero
+        } else {
+            PhotonPlan::Run {
+                count: ps.count,
+                casters: specular_objects,
+                k: ps.k.max(1),
+                max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
+                cone_k: ps.cone_k,
+            }
+        };
+        let fog = match &s.medium {
+            Some(m) => FogPlan::Run { density: m.density },
+            None => FogPlan::NoMedium,
+        };
         RenderPlan {
             width: s.width,
             height: s.height,
@@ -155,7 +222,14 @@ impl RenderPlan {
             lights,
             secondary,
             sharing,
+            photons,
+            fog,
         }
+    }
+
+    /// True when the photon pass runs.
+    pub fn runs_photons(&self) -> bool {
+        matches!(self.photons, PhotonPlan::Run { .. })
     }
 
     /// True when samples spread shadow strata and dielectric branches.
@@ -166,6 +240,18 @@ impl RenderPlan {
     /// True when reflected / refracted rays are traced.
     pub fn traces_secondary(&self) -> bool {
         matches!(self.secondary, Secondary::Traced { .. })
+    }
+}
+
+/// Default largest gather radius: 2% of the diagonal of the scene's bounds
+/// (a caustic's detail scale in a room-sized scene; the k-nearest search
+/// shrinks it wherever photons are dense).
+pub fn default_gather_radius(scene: &Scene) -> f32 {
+    let d = scene.bounds().extent().length();
+    if d.is_finite() && d > 0.0 {
+        0.02 * d
+    } else {
+        1.0
     }
 }
 
@@ -232,6 +318,27 @@ impl fmt::Display for RenderPlan {
             )?,
             Secondary::NoSpecularObject => writeln!(f, "  secondary rays: skipped (no mirror or dielectric object)")?,
             Secondary::DepthZero => writeln!(f, "  secondary rays: skipped (max depth is 0)")?,
+        }
+        match self.photons {
+            PhotonPlan::Run {
+                count,
+                casters,
+                k,
+                max_radius,
+                cone_k,
+            } => writeln!(
+                f,
+                "  photon pass: ran, {count} photons, emission restricted to {casters} specular caster(s); \
+                 gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}"
+            )?,
+            PhotonPlan::NoSpecularCaster => writeln!(f, "  photon pass: skipped (no specular caster)")?,
+            PhotonPlan::NoLights => writeln!(f, "  photon pass: skipped (no lights)")?,
+            PhotonPlan::DepthZero => writeln!(f, "  photon pass: skipped (max depth is 0)")?,
+            PhotonPlan::CountZero => writeln!(f, "  photon pass: skipped (photon count is 0)")?,
+        }
+        match self.fog {
+            FogPlan::Run { density } => writeln!(f, "  fog: ran, density {density} per unit length inside the water")?,
+            FogPlan::NoMedium => writeln!(f, "  fog: skipped (no medium)")?,
         }
         match self.sharing {
             Sharing::Spread => writeln!(
@@ -358,12 +465,21 @@ mod tests {
         );
         assert!(text.contains("ambient term: skipped"), "{text}");
         assert!(text.contains("sample spreading: skipped (1 sample per pixel"), "{text}");
+        assert_eq!(without.photons, PhotonPlan::NoSpecularCaster);
+        assert!(text.contains("photon pass: skipped (no specular caster)"), "{text}");
+        assert!(text.contains("fog: skipped (no medium)"), "{text}");
+        assert!(with.runs_photons());
+        assert!(with
+            .to_string()
+            .contains("photon pass: ran, 1000000 photons, emission restricted to 1 specular caster(s)"));
         let mut s = scene(4, SampleSharing::Spread, true);
         s.settings.max_depth = 0;
         let flat = RenderPlan::new(&s);
         assert_eq!(flat.secondary, Secondary::DepthZero);
+        assert_eq!(flat.photons, PhotonPlan::DepthZero);
         assert!(flat.to_string().contains("spread over 4 samples, at most 8 per sample"));
         s.lights.clear();
         assert!(RenderPlan::new(&s).to_string().contains("skipped (no lights)"));
+        assert_eq!(RenderPlan::new(&s).photons, PhotonPlan::NoLights);
     }
 }

@@ -3,7 +3,8 @@
 //! tiles are assembled in a fixed order, so the image is bit-identical for
 //! any number of threads.
 
-use super::plan::RenderPlan;
+use super::photon::{photon_pass, PhotonMap, PhotonStats};
+use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
 use crate::film::Film;
@@ -14,6 +15,7 @@ use crate::scene::Scene;
 use rayon::prelude::*;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Tile edge in pixels: big enough to amortise scheduling, small enough to
@@ -23,8 +25,11 @@ pub const TILE_SIZE: u32 = 32;
 /// What a render did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
-    /// Wall time of the render (not counting the accelerator build).
+    /// Wall time of the render, photon pass included (not counting the
+    /// accelerator build).
     pub wall_time: Duration,
+    /// The photon pass, when it ran.
+    pub photons: Option<PhotonStats>,
     /// Rays cast, by kind.
     pub rays: RayCounts,
     /// Camera samples taken.
@@ -58,6 +63,9 @@ impl fmt::Display for RenderStats {
             r.secondary,
             self.mrays_per_second()
         )?;
+        if let Some(p) = &self.photons {
+            writeln!(f, "{p}")?;
+        }
         write!(
             f,
             "samples: {}, dropped (NaN/inf): {}",
@@ -73,6 +81,8 @@ pub struct RenderOutput {
     pub film: Film,
     /// Statistics.
     pub stats: RenderStats,
+    /// The caustic map used, when the photon pass ran (for the debug overlay).
+    pub photon_map: Option<Arc<PhotonMap>>,
 }
 
 struct Tile {
@@ -89,13 +99,39 @@ struct TileResult {
     dropped: u64,
 }
 
-/// Renders `scene` as `plan` says, on the current rayon pool.
+/// Renders `scene` as `plan` says, on the current rayon pool: the photon
+/// pass first when the plan runs it, then the image.
 /// `progress(done_pixels, total_pixels)` is called after each tile (from
 /// worker threads, in completion order).
 pub fn render(
     scene: &Scene,
     accel: &dyn Accel,
     plan: &RenderPlan,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> RenderOutput {
+    let start = Instant::now();
+    let photons = match plan.photons {
+        PhotonPlan::Run { count, .. } => Some(photon_pass(scene, accel, count)),
+        _ => None,
+    };
+    let (map, photon_stats) = match photons {
+        Some((map, stats)) => (Some(Arc::new(map)), Some(stats)),
+        None => (None, None),
+    };
+    let mut out = render_with_photons(scene, accel, plan, map.as_deref(), progress);
+    out.stats.wall_time = start.elapsed();
+    out.stats.photons = photon_stats;
+    out.photon_map = map;
+    out
+}
+
+/// Renders the image with a given caustic map (or none), without running
+/// the photon pass: for callers that build or reuse the map themselves.
+pub fn render_with_photons(
+    scene: &Scene,
+    accel: &dyn Accel,
+    plan: &RenderPlan,
+    photons: Option<&PhotonMap>,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> RenderOutput {
     let start = Instant::now();
@@ -112,7 +148,10 @@ pub fn render(
             });
         }
     }
-    let integrator = Whitted::new(scene, accel, plan);
+    let mut integrator = Whitted::new(scene, accel, plan);
+    if let Some(map) = photons {
+        integrator = integrator.with_photons(map);
+    }
     let done = AtomicU64::new(0);
     let results: Vec<TileResult> = tiles
         .par_iter()
@@ -137,7 +176,11 @@ pub fn render(
         stats.dropped_samples += result.dropped;
     }
     stats.wall_time = start.elapsed();
-    RenderOutput { film, stats }
+    RenderOutput {
+        film,
+        stats,
+        photon_map: None,
+    }
 }
 
 fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Tile) -> TileResult {

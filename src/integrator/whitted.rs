@@ -27,12 +27,20 @@
 //! - Dielectrics have no diffuse or ambient term; they keep the specular
 //!   highlight of point lights only (a reflected ray never finds a point
 //!   light, while area lights show up in the reflection itself).
+//! - Caustics: with a photon map, diffuse surfaces add `ρ/π · E_caustic`,
+//!   the cone-filtered irradiance of the caustic photons (`photon::gather`),
+//!   so the shadow behind glass stays dark in direct light but receives the
+//!   focused light.
+//! - Fog: with a medium, every camera and secondary ray segment is blended
+//!   toward the fog colour by its length inside the medium (`fog.rs`).
 
-use super::plan::{RenderPlan, ShadowSampling};
+use super::fog;
+use super::photon::{GatherParams, PhotonMap};
+use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
 use crate::math::sampling::stratified;
 use crate::math::{offset_ray_origin, Ray, Rng, Vec2, Vec3A};
-use crate::scene::{Dielectric, Light, Material, Quad, Scene, ShadingModel, SurfaceInteraction};
+use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, ShadingModel, SurfaceInteraction};
 use std::f32::consts::PI;
 use std::ops::AddAssign;
 
@@ -123,6 +131,10 @@ pub struct Whitted<'a> {
     /// Area lights as rectangles, tested analytically by camera and specular
     /// rays (lights are not scene objects, so shadow rays never hit them).
     emitters: Vec<(Quad, Vec3A)>,
+    /// The caustic map and how to gather from it (none without photon pass).
+    caustics: Option<(&'a PhotonMap, GatherParams)>,
+    /// The fog, when the plan runs it.
+    medium: Option<&'a Medium>,
 }
 
 impl<'a> Whitted<'a> {
@@ -136,12 +148,38 @@ impl<'a> Whitted<'a> {
                 Light::Point { .. } => None,
             })
             .collect();
+        let medium = match plan.fog {
+            FogPlan::Run { .. } => scene.settings.medium.as_ref(),
+            FogPlan::NoMedium => None,
+        };
         Self {
             scene,
             accel,
             plan,
             emitters,
+            caustics: None,
+            medium,
         }
+    }
+
+    /// Adds the caustic radiance estimate from `map` at diffuse surfaces,
+    /// with the plan's gather settings (no effect when the plan skips the
+    /// photon pass).
+    pub fn with_photons(mut self, map: &'a PhotonMap) -> Self {
+        if let PhotonPlan::Run {
+            k, max_radius, cone_k, ..
+        } = self.plan.photons
+        {
+            self.caustics = Some((
+                map,
+                GatherParams {
+                    k: std::num::NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
+                    max_radius,
+                    cone_k,
+                },
+            ));
+        }
+        self
     }
 
     /// Radiance arriving along `ray` (toward its origin) after `depth`
@@ -160,13 +198,20 @@ impl<'a> Whitted<'a> {
                 }
             }
         }
-        if let Some(l) = emitted {
-            return l;
-        }
-        let Some(hit) = hit else {
-            return Vec3A::ZERO;
+        let l = match (emitted, hit) {
+            (Some(l), _) => l,
+            (None, Some(hit)) => self.shade(ray, &hit, depth, ctx),
+            (None, None) => Vec3A::ZERO,
         };
-        let si = self.scene.surface_interaction(ray, &hit);
+        match self.medium {
+            Some(m) => fog::apply(m, ray, t_nearest, l),
+            None => l,
+        }
+    }
+
+    /// Radiance leaving the surface hit by `ray` toward its origin.
+    fn shade(&self, ray: &Ray, hit: &crate::accel::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        let si = self.scene.surface_interaction(ray, hit);
         let m = &self.scene.materials[si.material as usize];
         if let Some(d) = m.dielectric {
             return self.dielectric(ray, &si, m, d, depth, ctx);
@@ -290,6 +335,11 @@ impl<'a> Whitted<'a> {
                 (Light::Area(_), ShadowSampling::Hard) => {
                     unreachable!("RenderPlan gives every area light stratified sampling")
                 }
+            }
+        }
+        if !highlights_only && m.is_diffuse() {
+            if let Some((map, g)) = &self.caustics {
+                out += m.diffuse * (1.0 / PI) * map.irradiance(si.p, ng, g);
             }
         }
         out

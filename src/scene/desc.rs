@@ -38,6 +38,50 @@ pub struct SceneDesc {
     /// `[[objects]]`.
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
+    /// `[photons]` (all keys optional).
+    #[serde(default)]
+    pub photons: PhotonsDesc,
+    /// `[medium]`: fog inside the water.
+    pub medium: Option<Spanned<MediumDesc>>,
+}
+
+/// `[photons]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhotonsDesc {
+    /// Photons emitted.
+    pub count: Option<Spanned<i64>>,
+    /// Photons gathered per estimate.
+    pub k: Option<Spanned<i64>>,
+    /// Largest gather radius.
+    pub max_radius: Option<Spanned<f64>>,
+    /// Cone-filter constant.
+    pub cone_k: Option<Spanned<f64>>,
+}
+
+/// `[medium]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediumDesc {
+    /// Extinction per unit length.
+    pub density: Spanned<f64>,
+    /// Fog colour (`color` is accepted too).
+    #[serde(alias = "color")]
+    pub colour: Option<Spanned<Vec3Desc>>,
+}
+
+/// One wave of a water surface (`waves = [{ … }, …]`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaveDesc {
+    /// Crest height above the mean level.
+    pub amplitude: Spanned<f64>,
+    /// Distance between crests.
+    pub wavelength: Spanned<f64>,
+    /// Direction of travel `[x, z]`.
+    pub direction: Spanned<Vec2Desc>,
+    /// Phase in degrees.
+    pub phase: Option<Spanned<f64>>,
 }
 
 /// Tone mapping names.
@@ -100,6 +144,8 @@ pub enum ObjectKind {
     Quad,
     /// `"mesh"`.
     Mesh,
+    /// `"water"`: a procedural height-field surface.
+    Water,
 }
 
 /// `[render]`.
@@ -210,14 +256,15 @@ pub struct LightDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
-    /// `"sphere"`, `"quad"` or `"mesh"`.
+    /// `"sphere"`, `"quad"`, `"mesh"` or `"water"`.
     #[serde(rename = "type")]
     pub kind: Spanned<ObjectKind>,
     /// Name used in messages.
     pub name: Option<String>,
     /// Material name (a key of `[materials]`).
     pub material: Spanned<String>,
-    /// Sphere centre, or quad centre (with `size`).
+    /// Sphere centre, quad centre (with `size`), or water centre (its `y`
+    /// is the mean water level).
     pub center: Option<Spanned<Vec3Desc>>,
     /// Sphere radius.
     pub radius: Option<Spanned<f64>>,
@@ -227,7 +274,7 @@ pub struct ObjectDesc {
     pub u: Option<Spanned<Vec3Desc>>,
     /// Quad second edge.
     pub v: Option<Spanned<Vec3Desc>>,
-    /// Quad `[width, height]` (with `center`).
+    /// Quad `[width, height]` (with `center`), or water extent `[x, z]`.
     pub size: Option<Spanned<Vec2Desc>>,
     /// Quad facing direction (with `center` and `size`).
     pub normal: Option<Spanned<Vec3Desc>>,
@@ -243,6 +290,10 @@ pub struct ObjectDesc {
     pub scale: Option<Spanned<ScaleDesc>>,
     /// Mesh smooth shading.
     pub smooth: Option<Spanned<bool>>,
+    /// Water: the sine waves of the height field.
+    pub waves: Option<Spanned<Vec<WaveDesc>>>,
+    /// Water: grid cells `[along x, along z]`.
+    pub resolution: Option<Spanned<Vec2Desc>>,
 }
 
 /// An array of exactly three numbers (integers or floats; validity is

@@ -12,12 +12,13 @@
 //! loaded in parallel, and shared by `Arc`.
 
 use super::desc::{
-    CameraDesc, LightDesc, LightKind, MaterialDesc, ModelName, ObjectDesc, ObjectKind, RenderDesc, ScaleDesc,
-    SceneDesc, SharingName, Spanned, ToneMapName, TriangleTestName, Vec2Desc, Vec3Desc,
+    CameraDesc, LightDesc, LightKind, MaterialDesc, MediumDesc, ModelName, ObjectDesc, ObjectKind, PhotonsDesc,
+    RenderDesc, ScaleDesc, SceneDesc, SharingName, Spanned, ToneMapName, TriangleTestName, Vec2Desc, Vec3Desc,
 };
+use super::water::{WaterSurface, Wave, MAX_WATER_RESOLUTION};
 use super::{
-    AreaLight, Camera, Dielectric, Light, Material, Mesh, Mirror, Object, Quad, RenderSettings, SampleSharing, Scene,
-    ShadingModel, Shape, Sphere, ToneMap,
+    AreaLight, Camera, Dielectric, Light, Material, Medium, Mesh, Mirror, Object, PhotonSettings, Quad, RenderSettings,
+    SampleSharing, Scene, ShadingModel, Shape, Sphere, ToneMap,
 };
 use crate::accel::TriangleTest;
 use crate::io::MeshError;
@@ -259,6 +260,46 @@ pub fn check_image_limits(width: u32, height: u32, spp: u32) -> Result<(), Image
     Ok(())
 }
 
+/// Largest photon count: photon indices are u32 in the k-d tree.
+pub const MAX_PHOTONS: u64 = u32::MAX as u64;
+/// Largest `k` of the photon gather.
+pub const MAX_PHOTON_GATHER: u32 = 100_000;
+/// Default water grid resolution (cells per side).
+pub const DEFAULT_WATER_RESOLUTION: u32 = 256;
+
+/// Available memory in bytes (`MemAvailable` of /proc/meminfo), when known.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Checks a photon count against [`MAX_PHOTONS`] and against the memory
+/// available now (the photon map's peak while it is built,
+/// `PEAK_BYTES_PER_PHOTON` per photon, must fit); shared by the loader and
+/// the CLI's `--photons`.
+pub fn check_photon_count(count: u64) -> Result<(), String> {
+    if count > MAX_PHOTONS {
+        return Err(format!(
+            "{count} photons: at most {MAX_PHOTONS} (photon indices are 32-bit)"
+        ));
+    }
+    let per = crate::integrator::photon::PEAK_BYTES_PER_PHOTON;
+    let needed = count.saturating_mul(per);
+    if let Some(available) = available_memory() {
+        if needed > available {
+            return Err(format!(
+                "{count} photons need up to {:.1} GiB while the photon map is built ({per} bytes per photon), \
+                 but only {:.1} GiB of memory is available",
+                needed as f64 / (1u64 << 30) as f64,
+                available as f64 / (1u64 << 30) as f64
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
 /// Relative mesh paths are resolved against the scene file's directory.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
@@ -302,7 +343,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         // One line, like every other message (toml puts the expectation on a second line).
         message: e.message().trim().lines().map(str::trim).collect::<Vec<_>>().join(": "),
     })?;
-    let settings = ctx.render(&desc.render)?;
+    let mut settings = ctx.render(&desc.render)?;
+    settings.photons = ctx.photons(&desc.photons)?;
     let camera = ctx.camera(&desc.camera)?;
     let (materials, material_index) = ctx.materials(&desc.materials)?;
     let lights = desc
@@ -315,6 +357,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     // are reported before any mesh file is read.
     let mut objects = Vec::with_capacity(desc.objects.len());
     let mut mesh_refs = Vec::new();
+    let mut waters: Vec<(usize, WaterSurface)> = Vec::new();
     for (i, o) in desc.objects.iter().enumerate() {
         let material =
             *material_index
@@ -332,6 +375,15 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let shape = match o.kind.get_ref() {
             ObjectKind::Sphere => ctx.sphere(o)?,
             ObjectKind::Quad => ctx.quad(o)?,
+            ObjectKind::Water => {
+                waters.push((i, ctx.water(o)?));
+                // The generated mesh is appended after the files' meshes.
+                Shape::Mesh {
+                    mesh: u32::MAX,
+                    transform: crate::math::Transform::IDENTITY,
+                    smooth: true,
+                }
+            }
             ObjectKind::Mesh => {
                 let (file, transform, smooth) = ctx.mesh_instance(o)?;
                 mesh_refs.push((i, file));
@@ -345,15 +397,31 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         };
         objects.push(Object { name, shape, material });
     }
-    let meshes = ctx.load_meshes(&mut objects, &mesh_refs)?;
-    Ok(Scene {
+    let mut meshes = ctx.load_meshes(&mut objects, &mesh_refs)?;
+    for (object, surface) in &waters {
+        let mesh = surface.mesh(&objects[*object].name).map_err(|e| {
+            ctx.invalid(
+                desc.objects[*object].kind.span(),
+                format!("water surface `{}`: {e}", objects[*object].name),
+            )
+        })?;
+        if let Shape::Mesh { mesh: index, .. } = &mut objects[*object].shape {
+            *index = meshes.len() as u32;
+        }
+        meshes.push(Arc::new(mesh));
+    }
+    let mut scene = Scene {
         settings,
         camera,
         materials,
         lights,
         meshes,
         objects,
-    })
+    };
+    if let Some(m) = &desc.medium {
+        scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(_, w)| w), scene.bounds())?);
+    }
+    Ok(scene)
 }
 
 fn kind_name(kind: ObjectKind) -> &'static str {
@@ -361,6 +429,7 @@ fn kind_name(kind: ObjectKind) -> &'static str {
         ObjectKind::Sphere => "sphere",
         ObjectKind::Quad => "quad",
         ObjectKind::Mesh => "mesh",
+        ObjectKind::Water => "water",
     }
 }
 
@@ -517,6 +586,8 @@ impl Ctx<'_> {
                 Some(SharingName::Spread) => SampleSharing::Spread,
                 Some(SharingName::Split) => SampleSharing::Split,
             },
+            photons: d.photons,
+            medium: None,
         })
     }
 
@@ -744,7 +815,7 @@ impl Ctx<'_> {
         }
     }
 
-    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 13] {
+    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 15] {
         fn s<T>(x: &Option<Spanned<T>>) -> Option<Range<usize>> {
             x.as_ref().map(|x| x.span())
         }
@@ -762,7 +833,160 @@ impl Ctx<'_> {
             ("translate", s(&o.translate)),
             ("scale", s(&o.scale)),
             ("smooth", s(&o.smooth)),
+            ("waves", s(&o.waves)),
+            ("resolution", s(&o.resolution)),
         ]
+    }
+
+    /// `[photons]`.
+    fn photons(&self, p: &PhotonsDesc) -> Result<PhotonSettings, SceneError> {
+        let d = PhotonSettings::default();
+        let count = match &p.count {
+            None => d.count,
+            Some(c) => {
+                let n = *c.get_ref();
+                if n < 0 {
+                    return Err(self.invalid(c.span(), format!("photon `count` = {n} must be ≥ 0")));
+                }
+                check_photon_count(n as u64).map_err(|e| self.invalid(c.span(), e))?;
+                n as u64
+            }
+        };
+        let k = match &p.k {
+            None => d.k,
+            Some(k) if (1..=MAX_PHOTON_GATHER as i64).contains(k.get_ref()) => *k.get_ref() as u32,
+            Some(k) => {
+                return Err(self.invalid(
+                    k.span(),
+                    format!("photon `k` = {} must be in 1..={MAX_PHOTON_GATHER}", k.get_ref()),
+                ))
+            }
+        };
+        let max_radius = match &p.max_radius {
+            None => d.max_radius,
+            Some(r) => {
+                let x = self.number(r, "max_radius")?;
+                if x <= 0.0 {
+                    return Err(self.invalid(r.span(), format!("`max_radius` = {x} must be > 0")));
+                }
+                Some(x)
+            }
+        };
+        let cone_k = match &p.cone_k {
+            None => d.cone_k,
+            Some(c) => {
+                let x = self.number(c, "cone_k")?;
+                if x < 1.0 {
+                    return Err(self.invalid(
+                        c.span(),
+                        format!("`cone_k` = {x} must be ≥ 1 (the cone filter's weight 1 − d/(k·r) must stay ≥ 0)"),
+                    ));
+                }
+                x
+            }
+        };
+        Ok(PhotonSettings {
+            count,
+            k,
+            max_radius,
+            cone_k,
+        })
+    }
+
+    /// `[medium]`: fills the (first) water object's volume.
+    fn medium(
+        &self,
+        m: &Spanned<MediumDesc>,
+        water: Option<&WaterSurface>,
+        bounds: crate::math::Aabb,
+    ) -> Result<Medium, SceneError> {
+        let d = m.get_ref();
+        let density = self.number(&d.density, "density")?;
+        if density < 0.0 {
+            return Err(self.invalid(d.density.span(), format!("`density` = {density} must be ≥ 0")));
+        }
+        let colour = match &d.colour {
+            None => Vec3A::ZERO,
+            Some(c) => self.colour(c, "colour")?,
+        };
+        let Some(water) = water else {
+            return Err(self.invalid(
+                m.span(),
+                "`[medium]` fills the water: the scene needs an object of `type = \"water\"`",
+            ));
+        };
+        Ok(Medium {
+            density,
+            colour,
+            region: water.volume(bounds.min.y),
+        })
+    }
+
+    /// A water surface: `center`, `size`, `resolution`, `waves`.
+    fn water(&self, o: &ObjectDesc) -> Result<WaterSurface, SceneError> {
+        let what = "a water surface";
+        self.only_keys(what, &Self::object_keys(o), &["center", "size", "resolution", "waves"])?;
+        let center = self.vec3(self.required(&o.center, "center", what, o.kind.span())?, "center")?;
+        let size_desc = self.required(&o.size, "size", what, o.kind.span())?;
+        let Vec2Desc([w, h]) = *size_desc.get_ref();
+        let (w, h) = (
+            self.check_finite(w, size_desc.span(), "size")?,
+            self.check_finite(h, size_desc.span(), "size")?,
+        );
+        if !(w > 0.0 && h > 0.0) {
+            return Err(self.invalid(size_desc.span(), format!("water `size` = [{w}, {h}] must be positive")));
+        }
+        let resolution = match &o.resolution {
+            None => (DEFAULT_WATER_RESOLUTION, DEFAULT_WATER_RESOLUTION),
+            Some(r) => {
+                let Vec2Desc([a, b]) = *r.get_ref();
+                let ok = |x: f64| x.fract() == 0.0 && (1.0..=MAX_WATER_RESOLUTION as f64).contains(&x);
+                if !(ok(a) && ok(b)) {
+                    return Err(self.invalid(
+                        r.span(),
+                        format!("water `resolution` = [{a}, {b}]: both must be integers in 1..={MAX_WATER_RESOLUTION}"),
+                    ));
+                }
+                (a as u32, b as u32)
+            }
+        };
+        let mut waves = Vec::new();
+        if let Some(list) = &o.waves {
+            for wd in list.get_ref() {
+                let amplitude = self.number(&wd.amplitude, "amplitude")?;
+                let wavelength = self.number(&wd.wavelength, "wavelength")?;
+                if wavelength <= 0.0 {
+                    return Err(self.invalid(wd.wavelength.span(), format!("`wavelength` = {wavelength} must be > 0")));
+                }
+                let Vec2Desc([dx, dz]) = *wd.direction.get_ref();
+                let dir = crate::math::Vec2::new(
+                    self.check_finite(dx, wd.direction.span(), "direction")?,
+                    self.check_finite(dz, wd.direction.span(), "direction")?,
+                );
+                let Some(direction) = dir.try_normalize() else {
+                    return Err(self.invalid(
+                        wd.direction.span(),
+                        "wave `direction` is the zero vector: it must have a direction",
+                    ));
+                };
+                let phase = match &wd.phase {
+                    None => 0.0,
+                    Some(p) => self.number(p, "phase")?.to_radians(),
+                };
+                waves.push(Wave {
+                    amplitude,
+                    wavelength,
+                    direction,
+                    phase,
+                });
+            }
+        }
+        Ok(WaterSurface {
+            center,
+            size: crate::math::Vec2::new(w, h),
+            resolution,
+            waves,
+        })
     }
 
     fn sphere(&self, o: &ObjectDesc) -> Result<Shape, SceneError> {

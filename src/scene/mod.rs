@@ -10,6 +10,7 @@ pub mod load;
 pub mod material;
 pub mod mesh;
 pub mod shape;
+pub mod water;
 
 use crate::accel::{Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3A};
@@ -21,6 +22,7 @@ pub use load::{load_scene, parse_scene, SceneError};
 pub use material::{Dielectric, Material, Mirror, ShadingModel};
 pub use mesh::Mesh;
 pub use shape::{Quad, Sphere};
+pub use water::{Medium, WaterSurface, Wave};
 
 /// Tone mapping applied before 8-bit output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +66,37 @@ pub struct RenderSettings {
     pub triangle_test: TriangleTest,
     /// Sample sharing (spp > 1).
     pub sharing: SampleSharing,
+    /// Photon map settings (the `[photons]` table).
+    pub photons: PhotonSettings,
+    /// Participating medium (the `[medium]` table): exponential fog inside
+    /// the water region. Kept here rather than in [`Scene`] so that code
+    /// building scenes by hand needs no change (`..Default::default()`).
+    pub medium: Option<Medium>,
+}
+
+/// Photon map settings (the `[photons]` table). The photon pass runs only
+/// when the scene has a specular caster (see `integrator::plan`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Photons emitted (paths traced from the lights); 0 disables the pass.
+    pub count: u64,
+    /// Photons gathered per estimate (the `k` of the k-nearest search).
+    pub k: u32,
+    /// Largest gather radius; `None`: 2% of the scene bounds' diagonal.
+    pub max_radius: Option<f32>,
+    /// Jensen's cone-filter constant `k_c` (≥ 1): weight `1 − d/(k_c r)`.
+    pub cone_k: f32,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        Self {
+            count: 1_000_000,
+            k: 64,
+            max_radius: None,
+            cone_k: 1.1,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -79,6 +112,8 @@ impl Default for RenderSettings {
             ambient: Vec3A::ZERO,
             triangle_test: TriangleTest::Watertight,
             sharing: SampleSharing::Spread,
+            photons: PhotonSettings::default(),
+            medium: None,
         }
     }
 }

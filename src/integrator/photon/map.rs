@@ -1,0 +1,380 @@
+//! The photon map: photon positions in kiddo's immutable k-d tree (built
+//! once, balanced, leaf buckets of [`BUCKET`] points), and per photon a
+//! compact record of its power and incoming direction.
+//!
+//! Memory per photon (the record layout of Jensen, *Realistic Image
+//! Synthesis Using Photon Mapping*, §6.3, which packs power as Ward's RGBE
+//! and the direction in two bytes; here the direction gets 4 bytes):
+//!
+//! | what | bytes |
+//! |---|---|
+//! | position, in the tree's leaves (3 × f32) | 12 |
+//! | photon index, in the tree's leaves (u32) | 4 |
+//! | power, RGBE shared exponent (Ward 1991) | 4 |
+//! | incoming direction, octahedral 2 × u16 (Cigolle et al. 2014) | 4 |
+//! | coarse position for the debug overlay (3 × u16 over the map's bounds) | 6 |
+//! | tree stems and leaf extents (≈ 12 bytes per 32-photon leaf) | ≈ 0.4 |
+//!
+//! about 30.4 bytes per stored photon ([`BYTES_PER_PHOTON`]). While the map
+//! is built, kiddo also holds the source positions (12 B) and a sort index
+//! (8 B, `usize`): the peak is [`PEAK_BYTES_PER_PHOTON`].
+
+use crate::math::{Aabb, Mat3A, Vec3A};
+use kiddo::immutable::float::kdtree::ImmutableKdTree;
+
+/// The tree stores positions rotated by this fixed rotation (queries are
+/// rotated alike; distances, hence the k nearest, are unchanged). Why:
+/// kiddo's immutable tree splits on x, y, z in turn at the median and moves
+/// the split off runs of equal values, so photons on an axis-aligned floor
+/// (all `y = 0`) would make every `y` split degenerate: a lopsided tree,
+/// minutes to build and slow to query. No scene plane is aligned with the
+/// rotated axes in practice.
+pub fn tree_rotation() -> Mat3A {
+    Mat3A::from_quat(glam::Quat::from_xyzw(0.31, 0.52, 0.17, 0.78).normalize())
+}
+
+/// `p` in the tree's (rotated) coordinates.
+#[inline]
+pub fn to_tree(rotation: &Mat3A, p: Vec3A) -> [f32; 3] {
+    (*rotation * p).to_array()
+}
+
+/// Points per leaf of the k-d tree.
+pub const BUCKET: usize = 32;
+
+/// Bytes held per stored photon once the map is built (see the module docs).
+pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 6.0 + 12.0 / BUCKET as f64;
+
+/// Bytes per photon at the peak of the build (the map, plus kiddo's copy of
+/// the source positions and its `usize` sort index), rounded up.
+pub const PEAK_BYTES_PER_PHOTON: u64 = 52;
+
+/// The k-d tree type: f32 coordinates, u32 photon indices, 3-D.
+pub type PhotonTree = ImmutableKdTree<f32, u32, 3, BUCKET>;
+
+/// A photon as traced: full precision, before packing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Photon {
+    /// Where it landed.
+    pub position: Vec3A,
+    /// Unit direction toward where it came from (`−` its travel direction).
+    pub incoming: Vec3A,
+    /// Flux it carries (W per channel).
+    pub power: Vec3A,
+}
+
+/// A packed photon record: RGBE power and octahedral incoming direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
+pub struct PhotonRecord {
+    /// Red, green, blue mantissas and the shared exponent (+128).
+    pub rgbe: [u8; 4],
+    /// Octahedral coordinates of the incoming direction.
+    pub dir: [u16; 2],
+}
+
+impl PhotonRecord {
+    /// Packs power and incoming direction.
+    pub fn new(power: Vec3A, incoming: Vec3A) -> Self {
+        Self {
+            rgbe: encode_rgbe(power),
+            dir: encode_octahedral(incoming),
+        }
+    }
+
+    /// Unpacked power.
+    #[inline]
+    pub fn power(&self) -> Vec3A {
+        decode_rgbe(self.rgbe)
+    }
+
+    /// Unpacked unit incoming direction.
+    #[inline]
+    pub fn incoming(&self) -> Vec3A {
+        decode_octahedral(self.dir)
+    }
+
+    /// True when the incoming direction is on the side of `n` (`ω·n > 0`),
+    /// without normalising the decoded direction (the gather's hot path).
+    #[inline]
+    pub fn arrives_from_side_of(&self, n: Vec3A) -> bool {
+        let x = self.dir[0] as f32 / 65535.0 * 2.0 - 1.0;
+        let y = self.dir[1] as f32 / 65535.0 * 2.0 - 1.0;
+        let z = 1.0 - x.abs() - y.abs();
+        let (x, y) = if z < 0.0 {
+            ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
+        } else {
+            (x, y)
+        };
+        n.x * x + n.y * y + n.z * z > 0.0
+    }
+}
+
+/// Ward's RGBE shared-exponent colour (Graphics Gems II, "Real Pixels"),
+/// with rounding to the nearest mantissa so that sums of many photons are
+/// unbiased: `c = m/256 · 2^(e − 128)`; error ≤ 1/256 of the largest
+/// channel. Negative or non-finite components are stored as 0.
+pub fn encode_rgbe(c: Vec3A) -> [u8; 4] {
+    let c = Vec3A::new(clean(c.x), clean(c.y), clean(c.z));
+    let max = c.max_element();
+    if max < 1e-37 {
+        return [0, 0, 0, 0];
+    }
+    // max = f · 2^e with f in [0.5, 1) (frexp); one more when rounding
+    // would carry the largest mantissa to 256.
+    let mut e = (max.log2().floor() as i32 + 1).clamp(-126, 127);
+    if (max * 256.0 / 2f32.powi(e)).round() > 255.0 && e < 127 {
+        e += 1;
+    }
+    let scale = 256.0 / 2f32.powi(e);
+    let m = |x: f32| (x * scale).round().clamp(0.0, 255.0) as u8;
+    [m(c.x), m(c.y), m(c.z), (e + 128) as u8]
+}
+
+fn clean(x: f32) -> f32 {
+    if x.is_finite() && x > 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// Inverse of [`encode_rgbe`].
+#[inline]
+pub fn decode_rgbe(rgbe: [u8; 4]) -> Vec3A {
+    if rgbe[3] == 0 {
+        return Vec3A::ZERO;
+    }
+    // 2^(e − 128) / 256 = 2^(e − 136), built from its bits (exponent
+    // field e − 136 + 127 ≥ 1 for every stored e ≥ 2; e = 1 underflows to
+    // a subnormal scale, handled by powi).
+    let f = if rgbe[3] >= 10 {
+        f32::from_bits(((rgbe[3] as u32) - 9) << 23)
+    } else {
+        2f32.powi(rgbe[3] as i32 - 136)
+    };
+    Vec3A::new(rgbe[0] as f32, rgbe[1] as f32, rgbe[2] as f32) * f
+}
+
+/// Octahedral encoding of a unit vector (Cigolle et al. 2014, "A Survey of
+/// Efficient Representations for Independent Unit Vectors"), 16 bits per
+/// coordinate: angular error below 1e-4 rad.
+pub fn encode_octahedral(v: Vec3A) -> [u16; 2] {
+    let l1 = v.x.abs() + v.y.abs() + v.z.abs();
+    if !l1.is_finite() || l1 <= 0.0 {
+        return [32768, 32768];
+    }
+    let (mut x, mut y) = (v.x / l1, v.y / l1);
+    if v.z < 0.0 {
+        let (ax, ay) = (x.abs(), y.abs());
+        x = (1.0 - ay).copysign(x);
+        y = (1.0 - ax).copysign(y);
+    }
+    let q = |a: f32| ((a.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).round() as u16;
+    [q(x), q(y)]
+}
+
+/// Inverse of [`encode_octahedral`].
+#[inline]
+pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
+    let x = e[0] as f32 / 65535.0 * 2.0 - 1.0;
+    let y = e[1] as f32 / 65535.0 * 2.0 - 1.0;
+    let z = 1.0 - x.abs() - y.abs();
+    let (x, y) = if z < 0.0 {
+        ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
+    } else {
+        (x, y)
+    };
+    Vec3A::new(x, y, z).normalize_or(Vec3A::Z)
+}
+
+/// The photon map.
+pub struct PhotonMap {
+    pub(super) tree: PhotonTree,
+    pub(super) rotation: Mat3A,
+    pub(super) records: Vec<PhotonRecord>,
+    coarse: Vec<[u16; 3]>,
+    bounds: Aabb,
+}
+
+impl std::fmt::Debug for PhotonMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PhotonMap")
+            .field("photons", &self.len())
+            .field("bounds", &self.bounds)
+            .finish()
+    }
+}
+
+impl PhotonMap {
+    /// Builds the map from positions and their records (same order; the
+    /// tree's items are indices into `records`). Consumes the positions:
+    /// afterwards they live only in the tree's leaves.
+    ///
+    /// # Panics
+    /// If the lengths differ or there are more than `u32::MAX` photons (the
+    /// photon pass never produces either).
+    pub fn build(positions: Vec<[f32; 3]>, records: Vec<PhotonRecord>) -> Self {
+        assert_eq!(positions.len(), records.len());
+        assert!(positions.len() <= u32::MAX as usize, "too many photons for u32 indices");
+        let bounds = positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3A::from_array(*p)));
+        let extent = if bounds.is_empty() {
+            Vec3A::ONE
+        } else {
+            bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE))
+        };
+        let scale = Vec3A::splat(65535.0) / extent;
+        let coarse = positions
+            .iter()
+            .map(|p| {
+                let q = ((Vec3A::from_array(*p) - bounds.min) * scale)
+                    .round()
+                    .clamp(Vec3A::ZERO, Vec3A::splat(65535.0));
+                [q.x as u16, q.y as u16, q.z as u16]
+            })
+            .collect();
+        let rotation = tree_rotation();
+        let mut positions = positions;
+        for p in &mut positions {
+            *p = to_tree(&rotation, Vec3A::from_array(*p));
+        }
+        let tree = PhotonTree::new_from_slice(&positions);
+        drop(positions);
+        Self {
+            tree,
+            rotation,
+            records,
+            coarse,
+            bounds,
+        }
+    }
+
+    /// Builds a map from unpacked photons (tests, tools).
+    pub fn from_photons(photons: &[Photon]) -> Self {
+        let positions = photons.iter().map(|p| p.position.to_array()).collect();
+        let records = photons.iter().map(|p| PhotonRecord::new(p.power, p.incoming)).collect();
+        Self::build(positions, records)
+    }
+
+    /// Number of stored photons.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    /// True when no photon was stored.
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+
+    /// Bounds of the stored positions.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Bytes held by the map: the tree's leaves (positions and indices),
+    /// stems and leaf extents (kiddo's layout: one f32 stem per power-of-two
+    /// leaf slot, two u32 per leaf), the records and the coarse positions.
+    pub fn memory_bytes(&self) -> usize {
+        let n = self.len();
+        let leaves = n.div_ceil(BUCKET).max(1);
+        let stems = if leaves < 2 { 0 } else { leaves.next_power_of_two() };
+        n * (12 + 4)
+            + leaves * 8
+            + stems * 4
+            + n * std::mem::size_of::<PhotonRecord>()
+            + n * std::mem::size_of::<[u16; 3]>()
+    }
+
+    /// Total power of all stored photons (f64 accumulation).
+    pub fn total_power(&self) -> [f64; 3] {
+        let mut s = [0.0f64; 3];
+        for r in &self.records {
+            let p = r.power();
+            s[0] += p.x as f64;
+            s[1] += p.y as f64;
+            s[2] += p.z as f64;
+        }
+        s
+    }
+
+    /// Record of photon `i`.
+    pub fn record(&self, i: usize) -> PhotonRecord {
+        self.records[i]
+    }
+
+    /// Position of photon `i`, quantised to 1/65535 of the map's bounds on
+    /// each axis: for the debug overlay (the exact positions live in the
+    /// tree's leaves, which kiddo does not expose).
+    pub fn coarse_position(&self, i: usize) -> Vec3A {
+        let q = self.coarse[i];
+        let t = Vec3A::new(q[0] as f32, q[1] as f32, q[2] as f32) / 65535.0;
+        self.bounds.min + (self.bounds.max - self.bounds.min) * t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng::{Domain, Rng};
+    use crate::math::sampling::uniform_sphere;
+    use crate::math::Vec2;
+
+    #[test]
+    fn rgbe_round_trips_within_its_precision() {
+        for c in [
+            Vec3A::new(1.0, 0.5, 0.25),
+            Vec3A::new(3.7e-7, 1.2e-7, 0.0),
+            Vec3A::new(1234.0, 1.0, 900.0),
+            Vec3A::splat(0.999),
+            Vec3A::new(1e-36, 0.0, 5e-37),
+        ] {
+            let d = decode_rgbe(encode_rgbe(c));
+            let max = c.max_element();
+            assert!((d - c).abs().max_element() <= max / 256.0 * 1.001, "{c} → {d}");
+        }
+        assert_eq!(decode_rgbe(encode_rgbe(Vec3A::ZERO)), Vec3A::ZERO);
+        assert_eq!(decode_rgbe(encode_rgbe(Vec3A::new(f32::NAN, -1.0, 0.0))), Vec3A::ZERO);
+    }
+
+    #[test]
+    fn octahedral_round_trips() {
+        let mut rng = Rng::new(1, Domain::Analysis, 0, 0);
+        for _ in 0..10_000 {
+            let (a, b) = rng.f32x2();
+            let v = uniform_sphere(Vec2::new(a, b));
+            let d = decode_octahedral(encode_octahedral(v));
+            assert!(v.cross(d).length() < 1e-4 && v.dot(d) > 0.0, "{v} → {d}");
+            let r = PhotonRecord::new(Vec3A::ONE, v);
+            for n in [Vec3A::X, Vec3A::Y, -Vec3A::Z, Vec3A::new(0.6, -0.8, 0.0)] {
+                if v.dot(n).abs() > 1e-3 {
+                    assert_eq!(r.arrives_from_side_of(n), v.dot(n) > 0.0);
+                }
+            }
+        }
+        for v in [Vec3A::X, -Vec3A::X, Vec3A::Y, -Vec3A::Y, Vec3A::Z, -Vec3A::Z] {
+            assert!(decode_octahedral(encode_octahedral(v)).dot(v) > 0.99999);
+        }
+    }
+
+    #[test]
+    fn records_are_eight_bytes_and_coarse_positions_are_close() {
+        assert_eq!(std::mem::size_of::<PhotonRecord>(), 8);
+        const { assert!(BYTES_PER_PHOTON <= 32.0) };
+        let photons: Vec<Photon> = (0..1000)
+            .map(|i| Photon {
+                position: Vec3A::new(i as f32 * 0.01, (i % 7) as f32, -(i as f32).sqrt()),
+                incoming: Vec3A::Y,
+                power: Vec3A::ONE,
+            })
+            .collect();
+        let map = PhotonMap::from_photons(&photons);
+        assert_eq!(map.len(), 1000);
+        let ext = map.bounds().extent();
+        for (i, p) in photons.iter().enumerate() {
+            let err = (map.coarse_position(i) - p.position).abs();
+            assert!(err.cmple(ext / 65535.0 + Vec3A::splat(1e-6)).all());
+        }
+        assert!((map.total_power()[0] - 1000.0).abs() < 1e-3);
+        assert!(map.memory_bytes() as f64 <= 1000.0 * BYTES_PER_PHOTON + 512.0);
+    }
+}
