@@ -131,11 +131,27 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Override the number of photons emitted for caustics (0 turns the pass off).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Overlay a debug view on the image: the photon map as points (the original
+    /// report's 'p' key) or the KD-tree's boxes (its 'k' key).
+    #[arg(long, value_enum)]
+    debug: Option<DebugView>,
+    /// Deepest KD-tree level drawn by `--debug kdtree`.
+    #[arg(long, default_value_t = 10)]
+    debug_depth: u32,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
     #[command(flatten)]
     accel: AccelArgs,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum DebugView {
+    Photons,
+    Kdtree,
 }
 
 #[derive(Args)]
@@ -224,6 +240,11 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     s.height = args.height.unwrap_or(s.height);
     s.spp = args.spp.unwrap_or(s.spp);
     s.seed = args.seed.unwrap_or(s.seed);
+    if let Some(n) = args.photons {
+        scene::load::check_photon_count(n)
+            .map_err(|e| bad_input(anyhow::anyhow!("{}: --photons: {e}", args.scene.display())))?;
+        s.photons.count = n;
+    }
     scene::load::check_image_limits(s.width, s.height, s.spp).map_err(|e| {
         bad_input(anyhow::anyhow!(
             "{}: with the command-line overrides: {e}",
@@ -284,9 +305,20 @@ fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>) -> Result<(
             .expect("static template"),
     );
     let start = Instant::now();
-    let out = integrator::render::render(scene, accel.as_ref(), &plan, &|done, _total| bar.set_position(done));
+    let mut out = integrator::render::render(scene, accel.as_ref(), &plan, &|done, _total| bar.set_position(done));
     bar.finish_and_clear();
     let wall = start.elapsed();
+    match args.debug {
+        Some(DebugView::Photons) => match out.photon_map.clone() {
+            Some(map) => integrator::debug::overlay_photons(&mut out.film, scene, &map),
+            None => eprintln!("--debug photons: no photon map (the plan skipped the photon pass)"),
+        },
+        Some(DebugView::Kdtree) => {
+            let tree = accel::kdtree::KdTreeAccel::build(scene, &args.accel.options(scene));
+            integrator::debug::overlay_boxes(&mut out.film, &scene.camera, &tree.node_boxes(args.debug_depth));
+        }
+        None => {}
+    }
 
     if let Some(p) = png {
         film::write_png(p, &out.film, st).map_err(bad_input)?;
