@@ -23,6 +23,7 @@ fn compare(name: &str) {
     scene.settings.width = 160;
     scene.settings.height = 90;
     scene.settings.spp = 2;
+    scene.settings.photons.count = 20_000;
     let (a, b) = (
         render_with(&scene, AccelKind::Embree),
         render_with(&scene, AccelKind::KdTree),
