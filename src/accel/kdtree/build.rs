@@ -1,19 +1,23 @@
-//! SAH KD-tree construction in O(N log N): Wald & Havran 2006, "On building
-//! fast kd-trees for ray tracing, and on doing that in O(N log N)".
+//! SAH KD-tree construction with perfect splits.
 //!
-//! Events (start, end, planar) of every primitive's bounds are sorted once per
-//! axis at the root. At each node the three sorted lists are swept to find the
-//! best plane under the surface area heuristic (SAH); the primitives are then
-//! classified left / right / both from the split axis' events alone, the
-//! one-sided primitives' events are filtered into the children (they stay
-//! sorted), and only the primitives straddling the plane are clipped to each
-//! child cell ("perfect splits": Sutherland–Hodgman on the triangle), their
-//! new events sorted and merged in. Every level is linear, so the whole build
-//! is O(N log N).
+//! Each node holds references to primitives with the bounds of the part of
+//! the primitive inside the node's cell. The split plane is chosen under the
+//! surface area heuristic (SAH, Wald & Havran 2006 eq. 3):
+//! * nodes of more than `EXACT_MAX_PRIMS` references bin their bounds
+//!   (min-max binning, Shevtsov, Soupikov & Kapustin 2007: O(n) per node,
+//!   no sorting) and evaluate the bin boundaries, plus the faces of the
+//!   references' bounds, which cut off empty space exactly;
+//! * smaller nodes sort their events and sweep them exactly (Wald & Havran
+//!   Algorithm 4).
+//!
+//! References crossing the plane are clipped to each child cell
+//! (Sutherland–Hodgman on the triangle, Wald & Havran §4.2), so the children
+//! get tight bounds. Each level is O(n): the build is O(N log N) overall.
 //!
 //! The two children of large nodes are built in parallel (rayon) into separate
-//! buffers that are appended in a fixed order, so the tree is the same for
-//! any number of threads.
+//! buffers that are appended in a fixed order, and large nodes bin and
+//! partition in parallel with order-preserving collects and integer counts, so
+//! the tree is the same for any number of threads.
 
 use super::node::{KdNode, KdTree, MAX_INDEX, MAX_TREE_DEPTH};
 use crate::math::{Aabb, Vec3A};
@@ -47,14 +51,17 @@ pub struct SahParams {
 }
 
 impl Default for SahParams {
-    /// Tuned on the test meshes and random soups (see the report in
-    /// ARCHITECTURE.md): K_T = 15, K_I = 20 as in Wald & Havran §5, 0.8 empty bonus.
+    /// Tuned on the Stanford dragon (tests/kdtree_throughput.rs): K_T = 30,
+    /// K_I = 20, empty bonus 0.9, leaves of up to 2 primitives. Wald &
+    /// Havran's K_T = 15, λ = 0.8 with single-primitive leaves cut slivers of
+    /// empty space down to the depth limit (3–4 M nodes, 60 % empty leaves)
+    /// for no gain in rays per second and a build three times longer.
     fn default() -> Self {
         Self {
-            traversal_cost: 15.0,
+            traversal_cost: 30.0,
             intersect_cost: 20.0,
-            empty_bonus: 0.8,
-            leaf_size: 1,
+            empty_bonus: 0.9,
+            leaf_size: 2,
             max_depth: None,
         }
     }
@@ -95,6 +102,7 @@ const PLANAR: u64 = 1;
 const START: u64 = 2;
 
 /// Primitive indices local to a node take the low 30 bits of an event.
+#[cfg(test)]
 const INDEX_MASK: u64 = (1 << 30) - 1;
 
 /// f32 → u32 whose unsigned order is the float order (−0 is folded onto +0).
@@ -134,18 +142,13 @@ fn event_kind(e: u64) -> u64 {
     (e >> 30) & 3
 }
 
-#[inline]
+#[cfg(test)]
 fn event_index(e: u64) -> usize {
     (e & INDEX_MASK) as usize
 }
 
-#[inline]
-fn with_index(e: u64, index: u32) -> u64 {
-    (e & !INDEX_MASK) | index as u64
-}
-
 /// Pushes the events of bounds `b` of local primitive `index` on each axis.
-#[inline]
+#[cfg(test)]
 fn push_events(events: &mut [Vec<u64>; 3], b: &Aabb, index: u32) {
     for (axis, list) in events.iter_mut().enumerate() {
         let (lo, hi) = (b.min[axis], b.max[axis]);
@@ -302,27 +305,12 @@ pub fn clip_triangle(p: [Vec3A; 3], cell: &Aabb) -> Aabb {
     b.intersection(fallback)
 }
 
-/// Reused per-thread buffers of the split step (no allocation per node for them).
-#[derive(Default)]
-struct Scratch {
-    side: Vec<u8>,
-    left_index: Vec<u32>,
-    right_index: Vec<u32>,
-    new_left: [Vec<u64>; 3],
-    new_right: [Vec<u64>; 3],
-}
-
-const BOTH: u8 = 0;
-const LEFT_ONLY: u8 = 1;
-const RIGHT_ONLY: u8 = 2;
-
-/// A node under construction: its cell, its primitives (global indices,
-/// ascending; the position in this list is the local index used by the
-/// events) and one sorted event list per axis.
-struct NodeWork {
-    cell: Aabb,
-    prims: Vec<u32>,
-    events: [Vec<u64>; 3],
+/// A primitive reference of a node under construction: the bounds of the
+/// part of primitive `prim` inside the node's cell.
+#[derive(Clone, Copy, Debug)]
+struct Ref {
+    bounds: Aabb,
+    prim: u32,
 }
 
 /// Nodes and primitive lists of a (sub)tree.
@@ -333,16 +321,12 @@ struct Output {
 }
 
 impl Output {
-    fn push_leaf(&mut self, prims: &[u32]) {
-        match prims {
-            [] => self.nodes.push(KdNode::leaf(0, 0)),
-            [one] => self.nodes.push(KdNode::leaf(1, *one)),
-            _ => {
-                self.nodes
-                    .push(KdNode::leaf(prims.len(), self.prim_indices.len() as u32));
-                self.prim_indices.extend_from_slice(prims);
-            }
-        }
+    /// A leaf over `refs`; its primitives are stored at `KdNode::data()` in
+    /// `prim_indices` (ascending, as `refs` keeps the input order).
+    fn push_leaf(&mut self, refs: &[Ref]) {
+        self.nodes
+            .push(KdNode::leaf(refs.len(), self.prim_indices.len() as u32));
+        self.prim_indices.extend(refs.iter().map(|r| r.prim));
     }
 
     fn append(&mut self, sub: Output) {
@@ -356,8 +340,51 @@ impl Output {
 /// Nodes with more primitives than this build their children in parallel.
 const PARALLEL_MIN_PRIMS: usize = 4096;
 
-/// Node sizes above which the three axes are swept in parallel.
-const PARALLEL_SWEEP_MIN_PRIMS: usize = 65_536;
+/// Nodes with more primitives than this bin and partition in parallel.
+const PARALLEL_NODE_MIN_PRIMS: usize = 65_536;
+
+/// Nodes with at most this many primitives get the exact SAH sweep (sorted
+/// events, Wald & Havran Algorithm 4, `O(n log n)` per node); larger ones are
+/// binned.
+const EXACT_MAX_PRIMS: usize = 64;
+
+/// Most bins per axis of a binned node (bin boundaries are the candidate planes).
+const BINS: usize = 64;
+
+/// Bins used for a node of `n` primitives. Fewer bins for nodes just above
+/// `EXACT_MAX_PRIMS` were tried: their misestimated straddler counts more than
+/// doubled the references on the dragon.
+#[inline]
+fn bins_for(_n: usize) -> usize {
+    BINS
+}
+
+/// Start/end counts per bin of one axis (Shevtsov, Soupikov, Kapustin 2007,
+/// "Highly parallel fast KD-tree construction": min-max binning).
+#[derive(Clone)]
+struct BinCounts {
+    starts: [[u32; BINS]; 3],
+    ends: [[u32; BINS]; 3],
+}
+
+impl BinCounts {
+    fn zero() -> Self {
+        Self {
+            starts: [[0; BINS]; 3],
+            ends: [[0; BINS]; 3],
+        }
+    }
+
+    fn add(mut self, o: &BinCounts) -> Self {
+        for k in 0..3 {
+            for b in 0..BINS {
+                self.starts[k][b] += o.starts[k][b];
+                self.ends[k][b] += o.ends[k][b];
+            }
+        }
+        self
+    }
+}
 
 struct Builder<'a, P: Primitives> {
     prims: &'a P,
@@ -377,39 +404,21 @@ pub(crate) fn build_tree<P: Primitives>(prims: &P, params: &SahParams) -> KdTree
         return tree;
     }
     assert!(n <= MAX_INDEX, "KD-tree input of {n} primitives exceeds 2^30 - 1");
-    let bounds: Vec<Aabb> = (0..n as u32).into_par_iter().map(|i| prims.bounds(i)).collect();
-    let cell = bounds.par_iter().copied().reduce(|| Aabb::EMPTY, Aabb::union);
-    let events: Vec<Vec<u64>> = (0..3)
+    let refs: Vec<Ref> = (0..n as u32)
         .into_par_iter()
-        .map(|axis| {
-            let mut list = Vec::with_capacity(2 * n);
-            for (i, b) in bounds.iter().enumerate() {
-                let (lo, hi) = (b.min[axis], b.max[axis]);
-                if lo == hi {
-                    list.push(event(lo, PLANAR, i as u32));
-                } else {
-                    list.push(event(lo, START, i as u32));
-                    list.push(event(hi, END, i as u32));
-                }
-            }
-            list.par_sort_unstable();
-            list
+        .map(|prim| Ref {
+            bounds: prims.bounds(prim),
+            prim,
         })
         .collect();
-    drop(bounds);
-    let mut events = events.into_iter();
-    let work = NodeWork {
-        cell,
-        prims: (0..n as u32).collect(),
-        events: [events.next().unwrap(), events.next().unwrap(), events.next().unwrap()],
-    };
+    let cell = refs.par_iter().map(|r| r.bounds).reduce(|| Aabb::EMPTY, Aabb::union);
     let builder = Builder {
         prims,
         params: *params,
         max_depth: params.depth_limit(n),
     };
     let mut out = Output::default();
-    builder.build_node(work, 0, &mut out, &mut Scratch::default());
+    builder.build_node(refs, cell, 0, &mut out);
     tree.nodes = out.nodes;
     tree.prim_indices = out.prim_indices;
     tree.bounds = cell;
@@ -417,16 +426,49 @@ pub(crate) fn build_tree<P: Primitives>(prims: &P, params: &SahParams) -> KdTree
 }
 
 impl<P: Primitives> Builder<'_, P> {
-    fn find_split(&self, work: &NodeWork) -> Option<SplitChoice> {
-        let n = work.prims.len();
-        let sweep = |axis: usize| sweep_axis(&self.params, &work.cell, axis, &work.events[axis], n);
-        let per_axis: Vec<Option<SplitChoice>> = if n >= PARALLEL_SWEEP_MIN_PRIMS {
-            (0..3).into_par_iter().map(sweep).collect()
+    /// The cheapest plane of a node: the exact sweep for small nodes; for
+    /// large ones the binned estimate, plus the planes on the faces of the
+    /// primitives' bounds (they cut off empty space exactly, which bins only
+    /// approximate).
+    fn find_split(&self, refs: &[Ref], cell: &Aabb) -> Option<SplitChoice> {
+        let n = refs.len();
+        let mut candidates: [Option<SplitChoice>; 3] = [None; 3];
+        if n <= EXACT_MAX_PRIMS {
+            let mut events = Vec::with_capacity(2 * n);
+            for (axis, slot) in candidates.iter_mut().enumerate() {
+                events.clear();
+                for r in refs {
+                    let (lo, hi) = (r.bounds.min[axis], r.bounds.max[axis]);
+                    if lo == hi {
+                        events.push(event(lo, PLANAR, 0));
+                    } else {
+                        events.push(event(lo, START, 0));
+                        events.push(event(hi, END, 0));
+                    }
+                }
+                events.sort_unstable();
+                *slot = sweep_axis(&self.params, cell, axis, &events, n);
+            }
         } else {
-            (0..3).map(sweep).collect()
-        };
+            let bins = bins_for(n);
+            let counts = if n >= PARALLEL_NODE_MIN_PRIMS {
+                refs.par_chunks(16_384)
+                    .map(|c| bin_refs(c, cell, bins))
+                    .reduce(BinCounts::zero, |a, b| a.add(&b))
+            } else {
+                bin_refs(refs, cell, bins)
+            };
+            let content = if n >= PARALLEL_NODE_MIN_PRIMS {
+                refs.par_iter().map(|r| r.bounds).reduce(|| Aabb::EMPTY, Aabb::union)
+            } else {
+                refs.iter().fold(Aabb::EMPTY, |a, r| a.union(r.bounds))
+            };
+            for (axis, slot) in candidates.iter_mut().enumerate() {
+                *slot = self.sweep_bins(&counts, bins, cell, &content, axis, n);
+            }
+        }
         // Lowest cost; ties go to the lower axis (fixed order: deterministic).
-        per_axis
+        candidates
             .into_iter()
             .flatten()
             .fold(None, |best: Option<SplitChoice>, c| match best {
@@ -435,30 +477,120 @@ impl<P: Primitives> Builder<'_, P> {
             })
     }
 
-    fn build_node(&self, work: NodeWork, depth: u32, out: &mut Output, scratch: &mut Scratch) {
-        let n = work.prims.len();
+    /// SAH over the bin boundaries of one axis, and over the faces of the
+    /// content bounds (`content`), which split off empty space: all `n`
+    /// primitives on one side.
+    fn sweep_bins(
+        &self,
+        counts: &BinCounts,
+        bins: usize,
+        cell: &Aabb,
+        content: &Aabb,
+        axis: usize,
+        n: usize,
+    ) -> Option<SplitChoice> {
+        let sa = cell.surface_area();
+        if sa.is_nan() || sa <= 0.0 {
+            return None;
+        }
+        let inv_sa = 1.0 / sa;
+        let ext = cell.extent();
+        let (a, b) = (ext[(axis + 1) % 3], ext[(axis + 2) % 3]);
+        let (lo, hi) = (cell.min[axis], cell.max[axis]);
+        let probabilities = |pos: f32| {
+            let (dl, dr) = (pos - lo, hi - pos);
+            (
+                2.0 * (a * b + (a + b) * dl) * inv_sa,
+                2.0 * (a * b + (a + b) * dr) * inv_sa,
+            )
+        };
+        let mut best: Option<SplitChoice> = None;
+        let mut consider = |pos: f32, n_left: usize, n_right: usize, planar_left: bool| {
+            if !(pos > lo && pos < hi) {
+                return;
+            }
+            let (pl, pr) = probabilities(pos);
+            let cost = self.params.split_cost(pl, pr, n_left, n_right);
+            if best.is_none_or(|b| cost < b.cost) {
+                best = Some(SplitChoice {
+                    cost,
+                    axis,
+                    pos,
+                    planar_left,
+                });
+            }
+        };
+        // Empty space below / above the primitives (primitives lying in the
+        // plane go to the non-empty side).
+        consider(content.min[axis], 0, n, false);
+        consider(content.max[axis], n, 0, true);
+        let width = hi - lo;
+        let (mut n_left, mut n_right) = (0usize, n);
+        for bin in 1..bins {
+            // Plane at the lower boundary of `bin`: primitives starting in a
+            // lower bin reach its left, those ending in a lower bin are
+            // entirely left of it (an estimate: exact sides are decided by
+            // comparing with the chosen plane).
+            n_left += counts.starts[axis][bin - 1] as usize;
+            n_right -= counts.ends[axis][bin - 1] as usize;
+            let pos = lo + width * (bin as f32 / bins as f32);
+            consider(pos, n_left, n_right, true);
+        }
+        best
+    }
+
+    fn build_node(&self, refs: Vec<Ref>, cell: Aabb, depth: u32, out: &mut Output) {
+        let n = refs.len();
         let split = if n <= self.params.leaf_size || depth >= self.max_depth {
             None
         } else {
-            self.find_split(&work).filter(|s| s.cost < self.params.leaf_cost(n))
+            self.find_split(&refs, &cell)
+                .filter(|s| s.cost < self.params.leaf_cost(n))
         };
         let Some(split) = split else {
-            out.push_leaf(&work.prims);
+            out.push_leaf(&refs);
             return;
         };
-        let (left, right) = self.split_node(work, &split, scratch);
+        let (axis, pos) = (split.axis, split.pos);
+        let mut left_cell = cell;
+        let mut right_cell = cell;
+        left_cell.max[axis] = pos;
+        right_cell.min[axis] = pos;
+        let (left, right) = if n >= PARALLEL_NODE_MIN_PRIMS {
+            rayon::join(
+                || {
+                    refs.par_iter()
+                        .filter_map(|r| self.child_ref(r, &split, &left_cell, true))
+                        .collect()
+                },
+                || {
+                    refs.par_iter()
+                        .filter_map(|r| self.child_ref(r, &split, &right_cell, false))
+                        .collect()
+                },
+            )
+        } else {
+            let mut left = Vec::with_capacity(n);
+            let mut right = Vec::with_capacity(n);
+            for r in &refs {
+                left.extend(self.child_ref(r, &split, &left_cell, true));
+                right.extend(self.child_ref(r, &split, &right_cell, false));
+            }
+            (left, right)
+        };
+        drop(refs);
         let index = out.nodes.len();
-        out.nodes.push(KdNode::interior(split.axis, split.pos));
+        out.nodes.push(KdNode::interior(axis, pos));
         if n >= PARALLEL_MIN_PRIMS {
             let (left_out, right_out) = rayon::join(
                 || {
                     let mut o = Output::default();
-                    self.build_node(left, depth + 1, &mut o, &mut Scratch::default());
+                    self.build_node(left, left_cell, depth + 1, &mut o);
                     o
                 },
                 || {
                     let mut o = Output::default();
-                    self.build_node(right, depth + 1, &mut o, &mut Scratch::default());
+                    self.build_node(right, right_cell, depth + 1, &mut o);
                     o
                 },
             );
@@ -467,135 +599,57 @@ impl<P: Primitives> Builder<'_, P> {
             out.nodes[index].set_above(above);
             out.append(right_out);
         } else {
-            self.build_node(left, depth + 1, out, scratch);
+            self.build_node(left, left_cell, depth + 1, out);
             let above = out.nodes.len();
             out.nodes[index].set_above(above);
-            self.build_node(right, depth + 1, out, scratch);
+            self.build_node(right, right_cell, depth + 1, out);
         }
     }
 
-    /// Wald & Havran §4.3: classify, filter, clip the straddlers, merge.
-    fn split_node(&self, work: NodeWork, split: &SplitChoice, s: &mut Scratch) -> (NodeWork, NodeWork) {
-        let n = work.prims.len();
-        let (axis, pos_key) = (split.axis, order_key(split.pos));
-        s.side.clear();
-        s.side.resize(n, BOTH);
-        for &e in &work.events[axis] {
-            let key = event_key(e);
-            let i = event_index(e);
-            match event_kind(e) {
-                END if key <= pos_key => s.side[i] = LEFT_ONLY,
-                START if key >= pos_key => s.side[i] = RIGHT_ONLY,
-                PLANAR => {
-                    s.side[i] = if key < pos_key || (key == pos_key && split.planar_left) {
-                        LEFT_ONLY
-                    } else {
-                        RIGHT_ONLY
-                    }
-                }
-                _ => {}
-            }
+    /// The reference `r` as seen by the child on one side of `split` (cell
+    /// `child_cell`), or `None` when it lies entirely on the other side.
+    /// Primitives ending at the plane are on its left, those starting at it on
+    /// its right, and those lying in it on the side the split chose; the ones
+    /// crossing it are clipped to the child's cell ("perfect splits", Wald &
+    /// Havran §4.2).
+    #[inline]
+    fn child_ref(&self, r: &Ref, split: &SplitChoice, child_cell: &Aabb, left: bool) -> Option<Ref> {
+        let (lo, hi) = (r.bounds.min[split.axis], r.bounds.max[split.axis]);
+        let pos = split.pos;
+        let goes_left = lo < pos || (lo == pos && hi == pos && split.planar_left);
+        let goes_right = hi > pos || (lo == pos && hi == pos && !split.planar_left);
+        if left && !goes_left || !left && !goes_right {
+            return None;
         }
-        let mut left_cell = work.cell;
-        let mut right_cell = work.cell;
-        left_cell.max[axis] = split.pos;
-        right_cell.min[axis] = split.pos;
-
-        s.left_index.clear();
-        s.left_index.resize(n, u32::MAX);
-        s.right_index.clear();
-        s.right_index.resize(n, u32::MAX);
-        let both = s.side.iter().filter(|&&x| x == BOTH).count();
-        let lefts = s.side.iter().filter(|&&x| x == LEFT_ONLY).count() + both;
-        let mut left_prims = Vec::with_capacity(lefts);
-        let mut right_prims = Vec::with_capacity(n - lefts + 2 * both);
-        for (i, &prim) in work.prims.iter().enumerate() {
-            if s.side[i] != RIGHT_ONLY {
-                s.left_index[i] = left_prims.len() as u32;
-                left_prims.push(prim);
+        if goes_left && goes_right {
+            let clipped = self.prims.clipped_bounds(r.prim, child_cell).intersection(r.bounds);
+            if clipped.is_empty() {
+                return None;
             }
-            if s.side[i] != LEFT_ONLY {
-                s.right_index[i] = right_prims.len() as u32;
-                right_prims.push(prim);
-            }
+            return Some(Ref {
+                bounds: clipped,
+                prim: r.prim,
+            });
         }
-        for k in 0..3 {
-            s.new_left[k].clear();
-            s.new_right[k].clear();
-        }
-        if both > 0 {
-            for (i, &prim) in work.prims.iter().enumerate() {
-                if s.side[i] == BOTH {
-                    let lb = self.prims.clipped_bounds(prim, &left_cell);
-                    push_events(&mut s.new_left, &lb, s.left_index[i]);
-                    let rb = self.prims.clipped_bounds(prim, &right_cell);
-                    push_events(&mut s.new_right, &rb, s.right_index[i]);
-                }
-            }
-            for k in 0..3 {
-                s.new_left[k].sort_unstable();
-                s.new_right[k].sort_unstable();
-            }
-        }
-        let NodeWork { events, .. } = work;
-        let mut left_events: [Vec<u64>; 3] = Default::default();
-        let mut right_events: [Vec<u64>; 3] = Default::default();
-        for (k, parent) in events.into_iter().enumerate() {
-            let (l, r) = merge_children(&parent, s, k);
-            left_events[k] = l;
-            right_events[k] = r;
-        }
-        (
-            NodeWork {
-                cell: left_cell,
-                prims: left_prims,
-                events: left_events,
-            },
-            NodeWork {
-                cell: right_cell,
-                prims: right_prims,
-                events: right_events,
-            },
-        )
+        Some(*r)
     }
 }
 
-/// One pass over a parent's sorted event list: one-sided primitives' events
-/// are renumbered (the renumbering keeps their order) and merged with the
-/// sorted events of the clipped straddlers.
-fn merge_children(parent: &[u64], s: &Scratch, axis: usize) -> (Vec<u64>, Vec<u64>) {
-    let new_l = &s.new_left[axis];
-    let new_r = &s.new_right[axis];
-    let mut left = Vec::with_capacity(parent.len() + new_l.len());
-    let mut right = Vec::with_capacity(parent.len() + new_r.len());
-    let (mut li, mut ri) = (0, 0);
-    for &e in parent {
-        let i = event_index(e);
-        match s.side[i] {
-            LEFT_ONLY => {
-                let e = with_index(e, s.left_index[i]);
-                while li < new_l.len() && new_l[li] < e {
-                    left.push(new_l[li]);
-                    li += 1;
-                }
-                left.push(e);
-            }
-            RIGHT_ONLY => {
-                let e = with_index(e, s.right_index[i]);
-                while ri < new_r.len() && new_r[ri] < e {
-                    right.push(new_r[ri]);
-                    ri += 1;
-                }
-                right.push(e);
-            }
-            _ => {}
+/// Min-max bin counts of `refs` in `bins` bins on the three axes of `cell`.
+fn bin_refs(refs: &[Ref], cell: &Aabb, bins: usize) -> BinCounts {
+    let mut counts = BinCounts::zero();
+    let ext = cell.extent();
+    for axis in 0..3 {
+        let lo = cell.min[axis];
+        let scale = if ext[axis] > 0.0 { bins as f32 / ext[axis] } else { 0.0 };
+        let bin = |x: f32| (((x - lo) * scale) as usize).min(bins - 1);
+        let (starts, ends) = (&mut counts.starts[axis], &mut counts.ends[axis]);
+        for r in refs {
+            starts[bin(r.bounds.min[axis])] += 1;
+            ends[bin(r.bounds.max[axis])] += 1;
         }
     }
-    left.extend_from_slice(&new_l[li..]);
-    right.extend_from_slice(&new_r[ri..]);
-    left.shrink_to_fit();
-    right.shrink_to_fit();
-    (left, right)
+    counts
 }
 
 #[cfg(test)]
@@ -643,9 +697,9 @@ mod tests {
     fn split_cost_follows_wald_havran() {
         let p = SahParams::default();
         // Both sides used: no bonus.
-        assert_eq!(p.split_cost(0.5, 0.5, 10, 10), 15.0 + 20.0 * 10.0);
-        // An empty side gets the 0.8 factor.
-        assert_eq!(p.split_cost(0.3, 0.7, 0, 10), 0.8 * (15.0 + 20.0 * 7.0));
+        assert_eq!(p.split_cost(0.5, 0.5, 10, 10), 30.0 + 20.0 * 10.0);
+        // An empty side gets the 0.9 factor.
+        assert_eq!(p.split_cost(0.3, 0.7, 0, 10), 0.9 * (30.0 + 20.0 * 7.0));
         assert_eq!(p.leaf_cost(4), 80.0);
         assert_eq!(p.depth_limit(1 << 20), 34);
         assert_eq!(p.depth_limit(usize::MAX), MAX_TREE_DEPTH);
@@ -750,11 +804,7 @@ mod tests {
                 while let Some(index) = stack.pop() {
                     let node = tree.nodes[index];
                     if node.is_leaf() {
-                        let list: Vec<u32> = if node.count() == 1 {
-                            vec![node.data()]
-                        } else {
-                            tree.prim_indices[node.data() as usize..][..node.count()].to_vec()
-                        };
+                        let list = tree.prim_indices[node.data() as usize..][..node.count()].to_vec();
                         assert!(list.windows(2).all(|w| w[0] < w[1]), "leaf lists ascend");
                         found |= list.contains(&(i as u32));
                         assert!(found, "box {i} missing from a leaf holding {p}");

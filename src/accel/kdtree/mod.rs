@@ -18,6 +18,7 @@
 //! triangle), and traversal intervals carry a rounding margin so no leaf that
 //! could hold the closest hit is skipped.
 
+pub mod bench;
 pub mod build;
 mod node;
 
@@ -25,7 +26,7 @@ use self::build::{build_tree, clip_triangle, Primitives, SahParams};
 use self::node::{widen, KdTree, LeafResult, TreeShape};
 use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
-use crate::math::{Aabb, Ray, Transform, Vec3A};
+use crate::math::{Aabb, Ray, Transform, Vec3, Vec3A};
 use crate::scene::{Mesh, Quad, Scene, Shape, Sphere};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -45,9 +46,49 @@ pub struct KdTreeAccel {
     top: KdTree,
     meshes: Vec<Arc<Mesh>>,
     /// One tree per entry of `meshes` (empty for meshes no object uses).
-    blas: Vec<KdTree>,
+    blas: Vec<Blas>,
     test: TriangleTest,
     build_time: Duration,
+}
+
+/// A triangle as stored in a BLAS leaf: its corners copied in leaf order, so
+/// a leaf's triangles are read from one contiguous block instead of through
+/// two index indirections (triangle → vertex indices → positions). The
+/// corners are the mesh's own values, so tests give the same bits as on the mesh.
+#[derive(Clone, Copy, Debug)]
+struct LeafTriangle {
+    corners: [Vec3; 3],
+    prim: u32,
+}
+
+/// A mesh's bottom-level tree and its leaf triangles (`tris[i]` is the
+/// triangle of reference `i`; the tree's `prim_indices` are dropped).
+#[derive(Default)]
+struct Blas {
+    tree: KdTree,
+    tris: Vec<LeafTriangle>,
+}
+
+impl Blas {
+    fn build(mesh: &Mesh, params: &SahParams) -> Self {
+        let mut tree = build_tree(&TrianglePrims(mesh), params);
+        let tris = std::mem::take(&mut tree.prim_indices)
+            .into_iter()
+            .map(|prim| {
+                let [a, b, c] = mesh.triangles[prim as usize];
+                let p = |v: u32| mesh.positions[v as usize];
+                LeafTriangle {
+                    corners: [p(a), p(b), p(c)],
+                    prim,
+                }
+            })
+            .collect();
+        Self { tree, tris }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.tree.memory_bytes() + self.tris.len() * std::mem::size_of::<LeafTriangle>()
+    }
 }
 
 /// A mesh's triangles as build primitives.
@@ -109,15 +150,15 @@ impl KdTreeAccel {
                 }
             })
             .collect();
-        let blas: Vec<KdTree> = scene
+        let blas: Vec<Blas> = scene
             .meshes
             .par_iter()
             .zip(used.par_iter())
             .map(|(mesh, &used)| {
                 if used {
-                    build_tree(&TrianglePrims(mesh), params)
+                    Blas::build(mesh, params)
                 } else {
-                    KdTree::default()
+                    Blas::default()
                 }
             })
             .collect();
@@ -128,7 +169,7 @@ impl KdTreeAccel {
             .map(|o| match o {
                 TopObject::Sphere(s) => widen(s.bounds()),
                 TopObject::Quad(q) => widen(q.bounds()),
-                TopObject::Mesh { mesh, transform } => widen(transform.bounds(&blas[*mesh as usize].bounds)),
+                TopObject::Mesh { mesh, transform } => widen(transform.bounds(&blas[*mesh as usize].tree.bounds)),
             })
             .collect();
         let top = build_tree(&BoxPrims(bounds), params);
@@ -152,6 +193,7 @@ impl KdTreeAccel {
             if let TopObject::Mesh { mesh, transform } = o {
                 out.extend(
                     self.blas[*mesh as usize]
+                        .tree
                         .cells(max_depth)
                         .into_iter()
                         .map(|(b, d)| (transform.bounds(&b), d)),
@@ -195,13 +237,13 @@ impl KdTreeAccel {
             }
             TopObject::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
-                let tree = &self.blas[*mesh as usize];
-                let mesh = &*self.meshes[*mesh as usize];
+                let blas = &self.blas[*mesh as usize];
                 let watertight = WatertightRay::new(&local);
                 let test = self.test;
-                tree.traverse(&local, *limit, |prims| {
-                    for &prim in prims {
-                        let [p0, p1, p2] = mesh.corners(prim as usize);
+                blas.tree.traverse(&local, *limit, |range| {
+                    for tri in &blas.tris[range] {
+                        let prim = tri.prim;
+                        let [p0, p1, p2] = tri.corners.map(Vec3A::from);
                         let result = match test {
                             TriangleTest::Watertight => watertight.intersect(p0, p1, p2, *limit),
                             TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, *limit),
@@ -251,8 +293,8 @@ impl KdTreeAccel {
         }
         let mut hit = false;
         let mut mailbox = Mailbox::default();
-        self.top.traverse(ray, t_max, |objects| {
-            for &instance in objects {
+        self.top.traverse(ray, t_max, |range| {
+            for &instance in &self.top.prim_indices[range] {
                 if mailbox.seen(instance) {
                     continue;
                 }
@@ -293,8 +335,8 @@ impl KdTreeAccel {
         let mut best_t = f32::INFINITY;
         let mut mailbox = Mailbox::default();
         let mut window = |t: f32| ulps_above(t, TIE_ULPS).min(t_max);
-        self.top.traverse(ray, t_max, |objects| {
-            for &instance in objects {
+        self.top.traverse(ray, t_max, |range| {
+            for &instance in &self.top.prim_indices[range] {
                 if mailbox.seen(instance) {
                     continue;
                 }
@@ -434,7 +476,8 @@ impl Accel for KdTreeAccel {
         let mut bottom = TreeShape::default();
         let mut triangles = 0usize;
         let mut blas_count = 0usize;
-        for (tree, mesh) in self.blas.iter().zip(&self.meshes) {
+        for (blas, mesh) in self.blas.iter().zip(&self.meshes) {
+            let tree = &blas.tree;
             if tree.nodes.is_empty() {
                 continue;
             }
@@ -448,7 +491,7 @@ impl Accel for KdTreeAccel {
             bottom.max_depth = bottom.max_depth.max(s.max_depth);
         }
         let memory_bytes = self.top.memory_bytes()
-            + self.blas.iter().map(KdTree::memory_bytes).sum::<usize>()
+            + self.blas.iter().map(Blas::memory_bytes).sum::<usize>()
             + self.objects.len() * std::mem::size_of::<TopObject>();
         let full_leaves = (bottom.leaves - bottom.empty_leaves).max(1);
         let details = vec![

@@ -1,6 +1,7 @@
 //! Compact KD-tree nodes and the single-tree traversal shared by both levels.
 
 use crate::math::{gamma, Aabb, Ray, Vec3A};
+use std::ops::Range;
 
 /// Low two bits of `KdNode::flags` for a leaf (0, 1, 2 are split axes).
 const LEAF: u32 = 3;
@@ -20,9 +21,9 @@ pub(crate) const MAX_TREE_DEPTH: u32 = 60;
 /// * interior: `data` = split position (f32 bits), `flags` = axis (2 bits) |
 ///   index of the above child << 2; the below child is the next node
 ///   (depth-first layout), so one index suffices;
-/// * leaf: `flags` = 3 | primitive count << 2, `data` = the primitive itself
-///   when there is exactly one, else the offset of the leaf's list in
-///   `KdTree::prim_indices`.
+/// * leaf: `flags` = 3 | primitive count << 2, `data` = the offset of the
+///   leaf's list in `KdTree::prim_indices` (and in any per-reference data
+///   stored alongside, such as the BLAS's leaf triangles).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C)]
 pub(crate) struct KdNode {
@@ -40,7 +41,7 @@ impl KdNode {
         }
     }
 
-    /// A leaf holding `count` primitives; `data` as described on the type.
+    /// A leaf holding `count` primitives listed from offset `data`.
     pub(crate) fn leaf(count: usize, data: u32) -> Self {
         debug_assert!(count <= MAX_INDEX);
         Self {
@@ -88,9 +89,7 @@ impl KdNode {
     /// once that buffer is appended at `node_base` / `prim_base`.
     pub(crate) fn rebased(mut self, node_base: usize, prim_base: usize) -> Self {
         if self.is_leaf() {
-            if self.count() > 1 {
-                self.data += prim_base as u32;
-            }
+            self.data += prim_base as u32;
         } else {
             let above = self.above() + node_base;
             self.set_above(above);
@@ -104,7 +103,7 @@ impl KdNode {
 pub(crate) struct KdTree {
     /// Nodes in depth-first order; node 0 is the root (absent for an empty tree).
     pub(crate) nodes: Vec<KdNode>,
-    /// Primitive lists of the leaves with more than one primitive.
+    /// Primitive lists of the leaves, one after the other in node order.
     pub(crate) prim_indices: Vec<u32>,
     /// Bounds of the primitives (the root cell).
     pub(crate) bounds: Aabb,
@@ -136,7 +135,8 @@ impl KdTree {
     }
 
     /// Front-to-back traversal (pbrt-v3 `KdTreeAccel::Intersect`), calling
-    /// `visit` on the primitives of each leaf the ray passes through, nearest
+    /// `visit` on the range of `prim_indices` of each non-empty leaf the ray
+    /// passes through, nearest
     /// first. `visit` returns the closest hit distance found so far (nodes that
     /// start beyond it are skipped) or `Stop`.
     ///
@@ -146,7 +146,7 @@ impl KdTree {
     /// range, not the node's interval, so a primitive met in several leaves
     /// always gives the same answer.
     #[inline]
-    pub(crate) fn traverse(&self, ray: &Ray, t_max: f32, mut visit: impl FnMut(&[u32]) -> LeafResult) {
+    pub(crate) fn traverse(&self, ray: &Ray, t_max: f32, mut visit: impl FnMut(Range<usize>) -> LeafResult) {
         if self.nodes.is_empty() {
             return;
         }
@@ -227,15 +227,12 @@ impl KdTree {
                     }
                 } else {
                     let count = node.count();
-                    let data = node.data();
-                    let prims = if count == 1 {
-                        std::slice::from_ref(&data)
-                    } else {
-                        &self.prim_indices[data as usize..data as usize + count]
-                    };
-                    match visit(prims) {
-                        LeafResult::Continue(t) => best = t,
-                        LeafResult::Stop => return,
+                    if count > 0 {
+                        let start = node.data() as usize;
+                        match visit(start..start + count) {
+                            LeafResult::Continue(t) => best = t,
+                            LeafResult::Stop => return,
+                        }
                     }
                 }
             }
@@ -335,7 +332,7 @@ mod tests {
         assert!(l.is_leaf());
         assert_eq!((l.count(), l.data()), (7, 99));
         assert_eq!(l.rebased(10, 5).data(), 104);
-        assert_eq!(KdNode::leaf(1, 99).rebased(10, 5).data(), 99);
+        assert_eq!(KdNode::leaf(0, 99).rebased(10, 5).data(), 104);
         assert_eq!(n.rebased(3, 5).above(), 12348);
     }
 }
