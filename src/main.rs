@@ -215,6 +215,11 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // A mistyped memory limit must not silently fall back to MemAvailable.
+    if let Err(e) = caustic::analysis::memory::budget() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Info(args) => run_info(args),

@@ -10,6 +10,7 @@ pub mod off;
 pub mod ply;
 mod source;
 
+use crate::analysis::memory::MemoryBudget;
 use crate::scene::mesh::MeshDataError;
 use crate::scene::Mesh;
 use std::fmt;
@@ -102,16 +103,62 @@ pub struct LoadLimits {
     pub max_input_bytes: u64,
     /// Most vertices or faces a header may announce (vertex indices are `u32`).
     pub max_elements: u64,
+    /// Memory the mesh (and its KD-tree) may take: a header whose counts need
+    /// more is refused before anything is allocated. `None`: not checked.
+    pub memory: Option<MemoryBudget>,
 }
 
 impl Default for LoadLimits {
-    /// 8 GiB of input, 2^28 vertices or faces (about 6 GiB of vertex and index data).
+    /// 8 GiB of input, 2^28 vertices or faces (about 6 GiB of vertex and index
+    /// data), and the memory budget of [`crate::analysis::memory::budget`]
+    /// (`CAUSTIC_MEMORY_LIMIT`, else the kernel's `MemAvailable`; an
+    /// unparsable variable is reported by the CLI at start-up).
     fn default() -> Self {
         Self {
             max_input_bytes: 8 << 30,
             max_elements: 1 << 28,
+            memory: crate::analysis::memory::budget().ok().flatten(),
         }
     }
+}
+
+/// Memory per vertex of a loaded mesh: position and normal, 3 × f32 each.
+pub const MESH_BYTES_PER_VERTEX: u64 = 24;
+/// Memory per triangle: three `u32` indices, plus about 64 bytes for the
+/// KD-tree built over it (nodes and triangle-index lists; the SAH tree
+/// references each triangle from ~2-3 leaves), plus the 36 bytes of corner
+/// normals computed while loading.
+pub const MESH_BYTES_PER_TRIANGLE: u64 = 12 + 64 + 36;
+
+/// Estimated memory of a mesh with these counts once loaded and indexed.
+pub fn mesh_memory_bytes(vertices: u64, triangles: u64) -> u128 {
+    u128::from(vertices) * u128::from(MESH_BYTES_PER_VERTEX)
+        + u128::from(triangles) * u128::from(MESH_BYTES_PER_TRIANGLE)
+}
+
+/// Refuses counts whose mesh would not fit the memory budget, before any allocation.
+pub(crate) fn check_mesh_memory(
+    vertices: u64,
+    faces: u64,
+    limits: &LoadLimits,
+    place: Option<Place>,
+) -> Result<(), ParseError> {
+    let Some(budget) = limits.memory else {
+        return Ok(());
+    };
+    let need = mesh_memory_bytes(vertices, faces);
+    if need > u128::from(budget.bytes) {
+        return Err(ParseError::new(
+            place,
+            format!(
+                "{vertices} vertices and {faces} faces need about {} of memory ({MESH_BYTES_PER_VERTEX} bytes \
+                 per vertex, {MESH_BYTES_PER_TRIANGLE} per triangle with its KD-tree), {}",
+                crate::analysis::memory::format_bytes(u64::try_from(need).unwrap_or(u64::MAX)),
+                budget
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The file formats the loader reads.
@@ -159,8 +206,34 @@ pub fn load_mesh_with(path: &Path, limits: &LoadLimits) -> Result<Mesh, MeshErro
     let result = source::open(path, limits).and_then(|mut src| match format {
         MeshFormat::Off => off::parse(&mut src, limits, name),
         MeshFormat::Ply => ply::parse(&mut src, limits, name),
-        MeshFormat::Obj => obj::parse(&mut src, name),
+        MeshFormat::Obj => obj::parse(&mut src, limits, name),
     });
+    result.map_err(|e| e.with_path(path))
+}
+
+/// Parses a mesh held in memory (`bytes` may be gzip-compressed: recognised
+/// by its magic bytes). `name` stands for the file in messages. The same
+/// parsers and limits as [`load_mesh_with`] apply; this is also the fuzzing
+/// entry point.
+pub fn parse_mesh_bytes(bytes: &[u8], format: MeshFormat, name: &str, limits: &LoadLimits) -> Result<Mesh, MeshError> {
+    let path = Path::new(name);
+    if bytes.len() as u64 > limits.max_input_bytes {
+        return Err(MeshError::new(
+            path,
+            None,
+            format!(
+                "{} bytes, more than the {} byte limit for a mesh file",
+                bytes.len(),
+                limits.max_input_bytes
+            ),
+        ));
+    }
+    let mut src = source::from_bytes(bytes.to_vec(), limits);
+    let result = match format {
+        MeshFormat::Off => off::parse(&mut src, limits, name.to_string()),
+        MeshFormat::Ply => ply::parse(&mut src, limits, name.to_string()),
+        MeshFormat::Obj => obj::parse(&mut src, limits, name.to_string()),
+    };
     result.map_err(|e| e.with_path(path))
 }
 
@@ -212,6 +285,64 @@ mod tests {
         let mut out = Vec::new();
         fan(&[4, 5, 6, 7, 8], &mut out);
         assert_eq!(out, vec![[4, 5, 6], [4, 6, 7], [4, 7, 8]]);
+    }
+
+    fn budget(bytes: u64) -> LoadLimits {
+        LoadLimits {
+            memory: Some(MemoryBudget { bytes, source: "test" }),
+            ..LoadLimits::default()
+        }
+    }
+
+    #[test]
+    fn bytes_of_every_format_parse_alike() {
+        let off = b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let limits = budget(1 << 20);
+        for (bytes, format) in [
+            (&off[..], MeshFormat::Off),
+            (&obj[..], MeshFormat::Obj),
+            (&ply[..], MeshFormat::Ply),
+        ] {
+            let m = parse_mesh_bytes(bytes, format, "m", &limits).unwrap();
+            assert_eq!(m.triangles, vec![[0, 1, 2]]);
+            // gzip is recognised by its magic bytes.
+            let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            std::io::Write::write_all(&mut gz, bytes).unwrap();
+            let m = parse_mesh_bytes(&gz.finish().unwrap(), format, "m", &limits).unwrap();
+            assert_eq!(m.positions.len(), 3);
+        }
+    }
+
+    #[test]
+    fn memory_is_checked_before_allocation() {
+        // One triangle needs 3 × 24 + 112 = 184 bytes.
+        assert_eq!(mesh_memory_bytes(3, 1), 184);
+        let off = b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        assert!(parse_mesh_bytes(off, MeshFormat::Off, "m.off", &budget(184)).is_ok());
+        let e = parse_mesh_bytes(off, MeshFormat::Off, "m.off", &budget(183)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "m.off: line 2: 3 vertices and 1 faces need about 184 bytes of memory (24 bytes per vertex, \
+             112 per triangle with its KD-tree), 183 bytes available"
+        );
+        let obj = b"v 0 0 0\nv 1 0 0\n  v 0 1 0\nf 1 2 3\n";
+        let e = parse_mesh_bytes(obj, MeshFormat::Obj, "m.obj", &budget(100)).unwrap_err();
+        assert!(
+            e.to_string().contains("3 vertices and 1 faces need about 184 bytes"),
+            "{e}"
+        );
+        // An empty-property element could otherwise announce 2^28 zero-byte records.
+        let ply = b"ply\nformat binary_little_endian 1.0\nelement junk 268435456\nend_header\n";
+        let e = parse_mesh_bytes(ply, MeshFormat::Ply, "m.ply", &budget(1 << 20)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("element 'junk' has 268435456 items but no properties"),
+            "{e}"
+        );
     }
 
     #[test]

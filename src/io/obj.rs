@@ -7,7 +7,7 @@
 //! first offending line itself.
 
 use super::source::{parse_f32, parse_i64, Source};
-use super::{ParseError, Place};
+use super::{LoadLimits, ParseError, Place};
 use crate::math::Vec3;
 use crate::scene::Mesh;
 use std::collections::HashMap;
@@ -16,7 +16,7 @@ use std::io::Read;
 /// Largest OBJ text (after decompression) read into memory: `tobj` needs it whole.
 pub const MAX_OBJ_BYTES: u64 = 2 << 30;
 
-pub(crate) fn parse(src: &mut Source, name: String) -> Result<Mesh, ParseError> {
+pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Result<Mesh, ParseError> {
     let mut text = Vec::new();
     let read = (&mut src.stream)
         .take(MAX_OBJ_BYTES + 1)
@@ -35,6 +35,16 @@ pub(crate) fn parse(src: &mut Source, name: String) -> Result<Mesh, ParseError> 
             "not UTF-8 text (a binary file named .obj?)".into(),
         ));
     }
+    // The memory check before `tobj` allocates: count the `v` and `f` records.
+    let (mut vertices, mut faces) = (0u64, 0u64);
+    for line in text.split(|&b| b == b'\n') {
+        match line.trim_ascii_start() {
+            [b'v', b' ' | b'\t', ..] => vertices += 1,
+            [b'f', b' ' | b'\t', ..] => faces += 1,
+            _ => {}
+        }
+    }
+    super::check_mesh_memory(vertices, faces, limits, None)?;
     let options = tobj::LoadOptions {
         single_index: false,
         triangulate: true,

@@ -143,6 +143,8 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
         }
     }
 
+    super::check_mesh_memory(vertex_count, face_count, limits, Some(Place::Line(counts_line)))?;
+
     let values_per_vertex = if header.normals { 6 } else { 3 };
     let mut positions = Vec::with_capacity(bounded_capacity(vertex_count, RESERVE_CAP));
     let mut normals = header

@@ -205,6 +205,15 @@ fn parse_header(s: &mut ByteStream, limits: &LoadLimits) -> Result<Header, Parse
         }
     }
     let encoding = encoding.ok_or_else(|| header_error(s.line(), "the header has no 'format' line".into()))?;
+    // Records of an element without properties take no bytes, so the file
+    // size cannot bound their count: 2^28 empty records per element line
+    // would make the loader spin for hours (found by fuzzing).
+    if let Some(e) = elements.iter().find(|e| e.properties.is_empty() && e.count > 0) {
+        return Err(header_error(
+            s.line(),
+            format!("element '{}' has {} items but no properties", e.name, e.count),
+        ));
+    }
     Ok(Header { encoding, elements })
 }
 
@@ -580,6 +589,13 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
             ));
         }
     }
+    let count_of = |name: &str| header.elements.iter().find(|e| e.name == name).map_or(0, |e| e.count);
+    super::check_mesh_memory(
+        count_of("vertex"),
+        count_of("face"),
+        limits,
+        Some(Place::Byte(src.stream.offset())),
+    )?;
     let s = &mut src.stream;
     let body = match header.encoding {
         Encoding::Ascii => parse_body(&mut Ascii(s), &header)?,

@@ -72,6 +72,24 @@ pub(crate) fn open(path: &Path, limits: &LoadLimits) -> Result<Source, ParseErro
     })
 }
 
+/// A [`Source`] over bytes in memory ([`super::parse_mesh_bytes`]): gzip is
+/// undone when the magic bytes say so, on this thread (no prefetch).
+pub(crate) fn from_bytes(bytes: Vec<u8>, limits: &LoadLimits) -> Source {
+    let file_len = bytes.len() as u64;
+    let compressed = bytes.starts_with(&[0x1f, 0x8b]);
+    let cursor = std::io::Cursor::new(bytes);
+    let inner: Box<dyn Read> = if compressed {
+        Box::new(flate2::bufread::MultiGzDecoder::new(cursor))
+    } else {
+        Box::new(cursor)
+    };
+    Source {
+        stream: ByteStream::new(inner, limits.max_input_bytes, compressed),
+        file_len,
+        compressed,
+    }
+}
+
 /// Runs a reader (the gzip decoder) on its own thread, a few chunks ahead of
 /// the parser, so decompression and parsing overlap (on the full dragon they
 /// take similar time). At most `DEPTH` chunks are in flight, so memory stays

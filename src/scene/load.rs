@@ -251,6 +251,15 @@ pub fn check_image_limits(width: u32, height: u32, spp: u32) -> Result<(), Image
             MAX_FILM_BYTES >> 30
         )));
     }
+    // Before allocating: the film must fit the memory budget (CAUSTIC_MEMORY_LIMIT or MemAvailable).
+    if let Ok(Some(budget)) = crate::analysis::memory::budget() {
+        if film_bytes > budget.bytes {
+            return Err(ImageLimit::Film(format!(
+                "{width}×{height} pixels need {} of film ({FILM_BYTES_PER_PIXEL} bytes per pixel), {budget}",
+                crate::analysis::memory::format_bytes(film_bytes)
+            )));
+        }
+    }
     let samples = pixels * spp as u64;
     if samples > MAX_CAMERA_SAMPLES {
         return Err(ImageLimit::Samples(format!(

@@ -1,0 +1,97 @@
+//! Inputs found by the fuzzers (`scripts/fuzz.sh`), kept in
+//! `tests/data/fuzz/<target>/`: each went through the same entry point as its
+//! fuzz target and once made it panic, hang or allocate too much. Every one
+//! must now give a clean `Ok` or `Err` quickly. Names ending in `.ok` must
+//! load; every other input must be refused.
+
+use caustic::analysis::memory::MemoryBudget;
+use caustic::io::{parse_mesh_bytes, LoadLimits, MeshFormat};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// The limits of the fuzz targets (fuzz/fuzz_targets/*.rs).
+fn fuzz_limits() -> LoadLimits {
+    LoadLimits {
+        max_input_bytes: 64 << 20,
+        memory: Some(MemoryBudget {
+            bytes: 256 << 20,
+            source: "fuzz",
+        }),
+        ..LoadLimits::default()
+    }
+}
+
+fn inputs(target: &str) -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/fuzz")
+        .join(target);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    files
+}
+
+/// Checks the outcome's kind against the name, and the time taken.
+#[track_caller]
+fn check<T, E: std::fmt::Display>(path: &Path, started: Instant, result: Result<T, E>) {
+    let elapsed = started.elapsed();
+    assert!(elapsed < Duration::from_secs(5), "{}: took {elapsed:?}", path.display());
+    let must_load = path.extension().is_some_and(|e| e == "ok");
+    match result {
+        Ok(_) => assert!(must_load, "{}: accepted", path.display()),
+        Err(e) => {
+            assert!(!must_load, "{}: refused: {e}", path.display());
+            let msg = e.to_string();
+            assert!(
+                !msg.is_empty() && !msg.contains('\n'),
+                "{}: message `{msg}`",
+                path.display()
+            );
+        }
+    }
+}
+
+fn mesh_target(target: &str, format: MeshFormat) {
+    let files = inputs(target);
+    assert!(!files.is_empty(), "no kept inputs for {target}");
+    for path in files {
+        let bytes = std::fs::read(&path).unwrap();
+        let started = Instant::now();
+        let result = parse_mesh_bytes(&bytes, format, &format!("fuzz.{target}"), &fuzz_limits());
+        check(&path, started, result);
+    }
+}
+
+#[test]
+fn ply_inputs() {
+    mesh_target("ply", MeshFormat::Ply);
+}
+
+#[test]
+fn off_inputs() {
+    mesh_target("off", MeshFormat::Off);
+}
+
+#[test]
+fn obj_inputs() {
+    mesh_target("obj", MeshFormat::Obj);
+}
+
+#[test]
+fn scene_inputs() {
+    let files = inputs("scene");
+    assert!(!files.is_empty(), "no kept inputs for scene");
+    let dir = tempfile::tempdir().unwrap();
+    for path in files {
+        let bytes = std::fs::read(&path).unwrap();
+        let Ok(text) = std::str::from_utf8(&bytes) else {
+            panic!("{}: the scene target only sees UTF-8", path.display());
+        };
+        let started = Instant::now();
+        let result = caustic::scene::parse_scene(text, &dir.path().join("fuzz.toml"));
+        check(&path, started, result);
+    }
+}

@@ -1,0 +1,708 @@
+//! A catalogue of hostile inputs run through the `caustic` binary: every one
+//! must end with exit code 2, one clear message naming the file and the
+//! problem (with the line, column or byte offset where there is one), and no
+//! output file. Zero-area faces are the exception: they are legal and must
+//! render. The catalogue is mirrored in `docs/hostile-inputs.md` (a test
+//! checks that every case is listed there).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A small, valid scene (8×8 pixels, one point light) without objects.
+const BASE: &str = "[render]\nwidth = 8\nheight = 8\nspp = 1\n\
+[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+[materials.white]\ndiffuse = [0.8, 0.8, 0.8]\n\
+[[lights]]\ntype = \"point\"\nposition = [0, 3, 3]\nintensity = 20\n";
+
+/// Lines of [`BASE`]: objects appended to it start on the next line.
+const BASE_LINES: usize = 13;
+
+/// A valid triangle in each format.
+const OFF_TRI: &str = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+const OBJ_TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+const PLY_ASCII_HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+/// A binary little-endian PLY header for `vertices` float vertices and `faces` faces.
+fn ply_binary_header(vertices: u64, faces: u64) -> Vec<u8> {
+    format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {vertices}\nproperty float x\n\
+         property float y\nproperty float z\nelement face {faces}\n\
+         property list uchar int vertex_indices\nend_header\n"
+    )
+    .into_bytes()
+}
+
+/// A binary PLY triangle: header, three vertices, one face `[0, 1, i2]`.
+fn ply_binary_tri(i2: i32) -> Vec<u8> {
+    let mut b = ply_binary_header(3, 1);
+    for v in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
+        for x in v {
+            b.extend(x.to_le_bytes());
+        }
+    }
+    b.push(3);
+    for i in [0i32, 1, i2] {
+        b.extend(i.to_le_bytes());
+    }
+    b
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+/// [`BASE`] plus one mesh object naming `file`; its `file` value is on line
+/// `BASE_LINES + 3`, column 8.
+fn mesh_scene(file: &str) -> String {
+    format!("{BASE}[[objects]]\ntype = \"mesh\"\nfile = \"{file}\"\nmaterial = \"white\"\n")
+}
+
+/// [`BASE`] plus a sphere with the given extra TOML.
+fn sphere_scene(extra: &str) -> String {
+    format!("{BASE}[[objects]]\ntype = \"sphere\"\n{extra}material = \"white\"\n")
+}
+
+const SPHERE: &str = "center = [0, 0, 0]\nradius = 1\n";
+
+/// What a case prepares in its temporary directory.
+struct Run {
+    /// The scene file given to `caustic render`.
+    scene: PathBuf,
+    /// Extra arguments (overrides).
+    args: Vec<String>,
+    /// Extra environment.
+    env: Vec<(&'static str, String)>,
+}
+
+impl Run {
+    fn scene(scene: PathBuf) -> Self {
+        Run {
+            scene,
+            args: Vec::new(),
+            env: Vec::new(),
+        }
+    }
+    fn args(mut self, args: &[&str]) -> Self {
+        self.args = args.iter().map(|s| s.to_string()).collect();
+        self
+    }
+    fn env(mut self, key: &'static str, value: &str) -> Self {
+        self.env.push((key, value.to_string()));
+        self
+    }
+}
+
+fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Writes `mesh` as `name` and a scene `scene.toml` that uses it.
+fn with_mesh(dir: &Path, name: &str, mesh: impl AsRef<[u8]>) -> Run {
+    write(dir, name, mesh);
+    Run::scene(write(dir, "scene.toml", mesh_scene(name)))
+}
+
+fn scene_text(dir: &Path, text: &str) -> Run {
+    Run::scene(write(dir, "scene.toml", text))
+}
+
+/// One hostile input.
+struct Case {
+    /// Identifier, listed in `docs/hostile-inputs.md`.
+    name: &'static str,
+    /// What the input is (the documentation's second column).
+    what: &'static str,
+    /// `None`: the input is legal and must render; `Some`: the substrings the
+    /// error message must contain (exit code 2).
+    expect: Option<&'static [&'static str]>,
+    setup: fn(&Path) -> Run,
+}
+
+/// The mesh `file` value's place in [`mesh_scene`].
+const MESH_AT: &str = "scene.toml:16:8: mesh of object `mesh#0`";
+/// The sphere's extra keys start on this line in [`sphere_scene`].
+const SPHERE_LINE: usize = BASE_LINES + 3;
+
+fn cases() -> Vec<Case> {
+    let _ = SPHERE_LINE;
+    vec![
+        // ------------------------------------------------------ truncated files
+        Case {
+            name: "ply-binary-truncated",
+            what: "binary PLY cut 21 bytes into its data",
+            expect: Some(&[MESH_AT, "m.ply: byte 169: the header announces 3 vertex, 1 face elements, which need at least 49 bytes, but only 21 bytes follow the header (wrong counts or truncated file)"]),
+            setup: |d| with_mesh(d, "m.ply", &ply_binary_tri(2)[..190]),
+        },
+        Case {
+            name: "ply-binary-truncated-gzip",
+            what: "the same, gzip-compressed (no file size to check the counts against)",
+            expect: Some(&["m.ply.gz: byte 190: truncated binary data: the file ends in vertex 1 of 3"]),
+            setup: |d| with_mesh(d, "m.ply.gz", gzip(&ply_binary_tri(2)[..190])),
+        },
+        Case {
+            name: "off-truncated",
+            what: "OFF whose face lines are missing",
+            expect: Some(&[MESH_AT, "m.off: line 6: unexpected end of file: face 0 of the 1 the header announces is missing"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n0.000 0.000 0.000\n1.000 0 0\n0 1 0\n"),
+        },
+        Case {
+            name: "obj-truncated",
+            what: "OBJ cut in the middle of a `v` record",
+            expect: Some(&[MESH_AT, "m.obj: line 3: invalid OBJ: position parse error"]),
+            setup: |d| with_mesh(d, "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1"),
+        },
+        // --------------------------------------------------------- wrong counts
+        Case {
+            name: "off-more-data-than-counts",
+            what: "OFF with one face more than its header announces",
+            expect: Some(&["m.off: line 7: unexpected data after the last of the 1 faces the header announces"]),
+            setup: |d| with_mesh(d, "m.off", format!("{OFF_TRI}3 0 2 1\n")),
+        },
+        Case {
+            name: "ply-ascii-fewer-faces-than-counts",
+            what: "ASCII PLY announcing 2 faces, holding 1",
+            expect: Some(&["m.ply: line 16: unexpected end of file in face 1 of 2"]),
+            setup: |d| {
+                let text = PLY_ASCII_HEADER.replace("element face 1", "element face 2")
+                    + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n           \n         \n";
+                with_mesh(d, "m.ply", text)
+            },
+        },
+        Case {
+            name: "off-face-with-two-vertices",
+            what: "OFF face with 2 vertices",
+            expect: Some(&["m.off: line 6: face 0 has 2 vertices; a face needs at least 3"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1   \n"),
+        },
+        // ------------------------------------------- negative or huge numbers
+        Case {
+            name: "off-negative-count",
+            what: "OFF vertex count −3",
+            expect: Some(&["m.off: line 2: negative vertex count -3"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n-3 1 0\n0 0 0\n"),
+        },
+        Case {
+            name: "off-10e12-vertices",
+            what: "OFF header announcing 10^12 vertices",
+            expect: Some(&["m.off: line 2: the header announces 1000000000000 vertices, more than the limit"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n1000000000000 1 0\n0 0 0\n"),
+        },
+        Case {
+            name: "ply-10e12-vertices",
+            what: "PLY header announcing 10^12 vertices",
+            expect: Some(&["m.ply: line 3: element 'vertex' announces 1000000000000 items, more than the limit"]),
+            setup: |d| with_mesh(d, "m.ply", ply_binary_header(1_000_000_000_000, 1)),
+        },
+        Case {
+            name: "off-coordinate-1e39",
+            what: "OFF coordinate 1e39 (overflows f32)",
+            expect: Some(&["m.off: line 3: vertex 0 has a non-finite value (inf)"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n1e39 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        },
+        Case {
+            name: "ply-negative-list-length",
+            what: "PLY face list of length −3",
+            expect: Some(&["m.ply: line 13: face 0 of 1 has -3 vertices; a face needs at least 3"]),
+            setup: |d| with_mesh(d, "m.ply", PLY_ASCII_HEADER.to_string() + "0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n"),
+        },
+        // ------------------------------------------------------- NaN and inf
+        Case {
+            name: "off-nan-coordinate",
+            what: "OFF coordinate `nan`",
+            expect: Some(&["m.off: line 4: vertex 1 has a non-finite value (NaN)"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
+        },
+        Case {
+            name: "ply-binary-nan-coordinate",
+            what: "binary PLY coordinate NaN",
+            expect: Some(&["m.ply: byte 193: vertex 1 of 3 has a non-finite value (NaN)"]),
+            setup: |d| {
+                let mut b = ply_binary_tri(2);
+                let header = ply_binary_header(3, 1).len();
+                b[header + 16..header + 20].copy_from_slice(&f32::NAN.to_le_bytes());
+                with_mesh(d, "m.ply", b)
+            },
+        },
+        Case {
+            name: "obj-inf-coordinate",
+            what: "OBJ coordinate `inf`",
+            expect: Some(&["m.obj: vertex 2 (counting from 0 in file order) has a non-finite coordinate"]),
+            setup: |d| with_mesh(d, "m.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n"),
+        },
+        Case {
+            name: "scene-nan-radius",
+            what: "scene `radius = nan` (TOML literal)",
+            expect: Some(&["scene.toml:17:10: `radius` is NaN: numbers must be finite"]),
+            setup: |d| scene_text(d, &sphere_scene("center = [0, 0, 0]\nradius = nan\n")),
+        },
+        Case {
+            name: "scene-inf-position",
+            what: "scene camera `position = [inf, 0, 5]`",
+            expect: Some(&["scene.toml:6:12: `position` is infinite: numbers must be finite"]),
+            setup: |d| scene_text(d, &BASE.replace("position = [0, 0, 5]", "position = [inf, 0, 5]")),
+        },
+        // ------------------------------------------------ indices out of range
+        Case {
+            name: "off-index-out-of-range",
+            what: "OFF face index 3 with 3 vertices",
+            expect: Some(&["m.off: line 6: face 0 uses vertex index 3, but there are only 3 vertices"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
+        },
+        Case {
+            name: "off-negative-index",
+            what: "OFF face index −1",
+            expect: Some(&["m.off: line 6: face 0 uses vertex index -1"]),
+            setup: |d| with_mesh(d, "m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n"),
+        },
+        Case {
+            name: "ply-binary-index-out-of-range",
+            what: "binary PLY face index 99",
+            expect: Some(&["m.ply: byte 218: face 0 of 1 uses vertex index 99, but there are only 3 vertices"]),
+            setup: |d| with_mesh(d, "m.ply", ply_binary_tri(99)),
+        },
+        Case {
+            name: "obj-index-out-of-range",
+            what: "OBJ face index 9 with 3 vertices",
+            expect: Some(&["m.obj: line 4: invalid OBJ"]),
+            setup: |d| with_mesh(d, "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"),
+        },
+        // ------------------------------------------- zero-area faces (legal)
+        Case {
+            name: "zero-area-faces-render",
+            what: "OFF with repeated-vertex and collinear (zero-area) faces",
+            expect: None,
+            setup: |d| {
+                // A proper triangle plus two degenerate ones (repeated and collinear vertices).
+                let off = "OFF\n4 3 0\n-1 -1 0\n1 -1 0\n0 1 0\n2 -1 0\n3 0 1 2\n3 0 0 1\n3 0 1 3\n";
+                with_mesh(d, "m.off", off)
+            },
+        },
+        // --------------------------------------------------------- not UTF-8
+        Case {
+            name: "scene-not-utf8",
+            what: "scene with bytes 0xFF 0xFE",
+            expect: Some(&["scene.toml:2:9: the scene file is not valid UTF-8 text"]),
+            setup: |d| {
+                let mut b = b"[render]\nwidth = ".to_vec();
+                b.extend([0xff, 0xfe, b'\n']);
+                Run::scene(write(d, "scene.toml", b))
+            },
+        },
+        Case {
+            name: "off-not-utf8",
+            what: "OFF with bytes 0xFF 0xFE as a coordinate",
+            expect: Some(&["m.off: line 3: vertex 0: expected a number, found '\u{fffd}\u{fffd}'"]),
+            setup: |d| with_mesh(d, "m.off", b"OFF\n3 1 0\n\xff\xfe 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        },
+        Case {
+            name: "obj-not-utf8",
+            what: "OBJ with an invalid UTF-8 sequence",
+            expect: Some(&["m.obj: line 2: not UTF-8 text (a binary file named .obj?)"]),
+            setup: |d| with_mesh(d, "m.obj", b"v 0 0 0\nv \xc3\x28 0 0\n"),
+        },
+        // ------------------------------------- not a regular file, or itself
+        Case {
+            name: "scene-is-directory",
+            what: "scene path is a directory",
+            expect: Some(&["sub: is a directory, not a scene file"]),
+            setup: |d| {
+                std::fs::create_dir(d.join("sub")).unwrap();
+                Run::scene(d.join("sub"))
+            },
+        },
+        Case {
+            name: "mesh-is-directory",
+            what: "mesh path is a directory",
+            expect: Some(&[MESH_AT, "dir.off: is a directory, not a mesh file"]),
+            setup: |d| {
+                std::fs::create_dir(d.join("dir.off")).unwrap();
+                Run::scene(write(d, "scene.toml", mesh_scene("dir.off")))
+            },
+        },
+        Case {
+            name: "mesh-is-the-scene-itself",
+            what: "scene `self.off` naming itself as its mesh",
+            expect: Some(&["self.off:16:8: mesh of object `mesh#0`", "self.off: line 1: the vertex count '[render]' is not an integer"]),
+            setup: |d| Run::scene(write(d, "self.off", mesh_scene("self.off"))),
+        },
+        Case {
+            name: "mesh-is-scene-toml",
+            what: "mesh `file` naming the scene file `scene.toml`",
+            expect: Some(&[MESH_AT, "unknown mesh format: expected a .off, .obj or .ply file"]),
+            setup: |d| Run::scene(write(d, "scene.toml", mesh_scene("scene.toml"))),
+        },
+        Case {
+            name: "mesh-is-dev-zero",
+            what: "mesh `zero.ply`, a symlink to /dev/zero",
+            expect: Some(&[MESH_AT, "zero.ply: is not a regular file"]),
+            setup: |d| {
+                std::os::unix::fs::symlink("/dev/zero", d.join("zero.ply")).unwrap();
+                Run::scene(write(d, "scene.toml", mesh_scene("zero.ply")))
+            },
+        },
+        Case {
+            name: "mesh-is-fifo",
+            what: "mesh `pipe.off`, a FIFO (would block forever if opened)",
+            expect: Some(&[MESH_AT, "pipe.off: is not a regular file"]),
+            setup: |d| {
+                let ok = Command::new("mkfifo").arg(d.join("pipe.off")).status().unwrap();
+                assert!(ok.success(), "mkfifo failed");
+                Run::scene(write(d, "scene.toml", mesh_scene("pipe.off")))
+            },
+        },
+        Case {
+            name: "mesh-missing",
+            what: "mesh file that does not exist",
+            expect: Some(&[MESH_AT, "nothere.off: No such file or directory"]),
+            setup: |d| Run::scene(write(d, "scene.toml", mesh_scene("nothere.off"))),
+        },
+        Case {
+            name: "scene-missing",
+            what: "scene file that does not exist",
+            expect: Some(&["nothere.toml: cannot read the scene file: No such file or directory"]),
+            setup: |d| Run::scene(d.join("nothere.toml")),
+        },
+        // -------------------------------------------------------- empty files
+        Case {
+            name: "off-empty",
+            what: "empty OFF file",
+            expect: Some(&[MESH_AT, "m.off: line 1: empty file: no OFF header or counts"]),
+            setup: |d| with_mesh(d, "m.off", ""),
+        },
+        Case {
+            name: "ply-empty",
+            what: "empty PLY file",
+            expect: Some(&[MESH_AT, "m.ply: line 1: not a PLY file: the first line must be 'ply'"]),
+            setup: |d| with_mesh(d, "m.ply", ""),
+        },
+        Case {
+            name: "scene-empty",
+            what: "empty scene file",
+            expect: Some(&["scene.toml:1:1: missing field `camera`"]),
+            setup: |d| scene_text(d, ""),
+        },
+        // ------------------------------------------------------- gzip bombs
+        Case {
+            name: "gzip-bomb-ascii",
+            what: "ASCII PLY header + 64 MiB of zero bytes, gzipped (64 KiB)",
+            expect: Some(&["m.ply.gz: line 10: a token longer than 64 bytes"]),
+            setup: |d| {
+                // 64 MiB of zero bytes after the header compress to ~64 KiB.
+                let mut b = PLY_ASCII_HEADER.as_bytes().to_vec();
+                b.resize(b.len() + (64 << 20), 0);
+                with_mesh(d, "m.ply.gz", gzip(&b))
+            },
+        },
+        Case {
+            name: "gzip-bomb-binary-counts",
+            what: "binary PLY.gz announcing 2×10^8 vertices, 64 MiB of zeros, `CAUSTIC_MEMORY_LIMIT=1G`",
+            expect: Some(&[
+                "m.ply.gz: byte 177: 200000000 vertices and 1 faces need about 4.470 GiB of memory",
+                "(24 bytes per vertex, 112 per triangle with its KD-tree), 1.000 GiB allowed by CAUSTIC_MEMORY_LIMIT",
+            ]),
+            setup: |d| {
+                let mut b = ply_binary_header(200_000_000, 1);
+                b.resize(b.len() + (64 << 20), 0);
+                with_mesh(d, "m.ply.gz", gzip(&b)).env("CAUSTIC_MEMORY_LIMIT", "1G")
+            },
+        },
+        // ------------------------------------------- absurd resolution or spp
+        Case {
+            name: "scene-width-out-of-range",
+            what: "scene `width = 1000000`",
+            expect: Some(&["scene.toml:2:9: `width` = 1000000 is out of range: it must be in 1..=65536"]),
+            setup: |d| scene_text(d, &BASE.replace("width = 8", "width = 1000000")),
+        },
+        Case {
+            name: "scene-film-too-large",
+            what: "scene 65536×65536",
+            expect: Some(&["scene.toml:2:9: 65536×65536 pixels need 256.0 GiB of film", "more than the 16 GiB limit"]),
+            setup: |d| scene_text(d, &BASE.replace("width = 8\nheight = 8", "width = 65536\nheight = 65536")),
+        },
+        Case {
+            name: "scene-spp-absurd",
+            what: "scene 4096×4096 at `spp = 4294967295`",
+            expect: Some(&["scene.toml:4:7:", "4096×4096 pixels × 4294967295 spp", "more than the limit of 2^40"]),
+            setup: |d| {
+                scene_text(d, &BASE.replace("width = 8\nheight = 8\nspp = 1", "width = 4096\nheight = 4096\nspp = 4294967295"))
+            },
+        },
+        Case {
+            name: "scene-spp-negative",
+            what: "scene `spp = -1`",
+            expect: Some(&["scene.toml:4:7: invalid value: integer `-1`, expected u32"]),
+            setup: |d| scene_text(d, &BASE.replace("spp = 1", "spp = -1")),
+        },
+        Case {
+            name: "cli-width-override-absurd",
+            what: "`--width 65536 --height 65536`",
+            expect: Some(&["scene.toml: with the command-line overrides: 65536×65536 pixels need 256.0 GiB of film"]),
+            setup: |d| scene_text(d, BASE).args(&["--width", "65536", "--height", "65536"]),
+        },
+        Case {
+            name: "cli-spp-override-absurd",
+            what: "`--width 512 --height 512 --spp 4294967295`",
+            expect: Some(&["with the command-line overrides: 512×512 pixels × 4294967295 spp"]),
+            setup: |d| scene_text(d, BASE).args(&["--width", "512", "--height", "512", "--spp", "4294967295"]),
+        },
+        Case {
+            name: "cli-width-zero",
+            what: "`--width 0`",
+            expect: Some(&["with the command-line overrides: 0×8 pixels, 1 spp: width and height must be in 1..=65536"]),
+            setup: |d| scene_text(d, BASE).args(&["--width", "0"]),
+        },
+        // ----------------------------------------------- memory before allocation
+        Case {
+            name: "film-exceeds-memory-limit",
+            what: "1024×1024 film with `CAUSTIC_MEMORY_LIMIT=32M`",
+            expect: Some(&["scene.toml:2:9: 1024×1024 pixels need 64.0 MiB of film (64 bytes per pixel), 32.0 MiB allowed by CAUSTIC_MEMORY_LIMIT"]),
+            setup: |d| {
+                scene_text(d, &BASE.replace("width = 8\nheight = 8", "width = 1024\nheight = 1024"))
+                    .env("CAUSTIC_MEMORY_LIMIT", "32M")
+            },
+        },
+        Case {
+            name: "mesh-exceeds-memory-limit",
+            what: "a triangle with `CAUSTIC_MEMORY_LIMIT=100`",
+            expect: Some(&[MESH_AT, "m.off: line 2: 3 vertices and 1 faces need about 184 bytes of memory (24 bytes per vertex, 112 per triangle with its KD-tree), 100 bytes allowed by CAUSTIC_MEMORY_LIMIT"]),
+            setup: |d| {
+                // A 1×1 film (64 bytes) fits the 100-byte limit; the mesh does not.
+                write(d, "m.off", OFF_TRI);
+                let text = mesh_scene("m.off").replace("width = 8\nheight = 8", "width = 1\nheight = 1");
+                scene_text(d, &text).env("CAUSTIC_MEMORY_LIMIT", "100")
+            },
+        },
+        Case {
+            name: "memory-limit-unparsable",
+            what: "`CAUSTIC_MEMORY_LIMIT=lots`",
+            expect: Some(&["CAUSTIC_MEMORY_LIMIT=\"lots\" is not a byte count"]),
+            setup: |d| scene_text(d, BASE).env("CAUSTIC_MEMORY_LIMIT", "lots"),
+        },
+        // ------------------------------------------------ geometry and camera
+        Case {
+            name: "scene-negative-radius",
+            what: "sphere `radius = -1`",
+            expect: Some(&["scene.toml:17:10: sphere `radius` = -1 must be > 0"]),
+            setup: |d| scene_text(d, &sphere_scene("center = [0, 0, 0]\nradius = -1\n")),
+        },
+        Case {
+            name: "scene-camera-degenerate",
+            what: "camera `look_at` = `position`",
+            expect: Some(&["scene.toml:7:11: `look_at` equals the camera `position`"]),
+            setup: |d| scene_text(d, &BASE.replace("look_at = [0, 0, 0]", "look_at = [0, 0, 5]")),
+        },
+        Case {
+            name: "scene-camera-up-parallel",
+            what: "camera looking straight down the default `up`",
+            expect: Some(&["scene.toml:7:11: the default `up` [0, 1, 0] is parallel to the viewing direction"]),
+            setup: |d| scene_text(d, &BASE.replace("look_at = [0, 0, 0]", "look_at = [0, -3, 5]")),
+        },
+        // ------------------------------------------- keys, types, references
+        Case {
+            name: "scene-unknown-key",
+            what: "`widht = 3` in `[render]`",
+            expect: Some(&["scene.toml:5:1: unknown field `widht`"]),
+            setup: |d| scene_text(d, &BASE.replace("spp = 1\n", "spp = 1\nwidht = 3\n")),
+        },
+        Case {
+            name: "scene-wrong-type",
+            what: "`width = \"eight\"`",
+            expect: Some(&["scene.toml:2:9: invalid type: string \"eight\", expected u32"]),
+            setup: |d| scene_text(d, &BASE.replace("width = 8", "width = \"eight\"")),
+        },
+        Case {
+            name: "scene-missing-material",
+            what: "object with `material = \"gold\"` (undefined)",
+            expect: Some(&["scene.toml:18:12: unknown material `gold` (defined: `white`)"]),
+            setup: |d| scene_text(d, &sphere_scene(SPHERE).replace("material = \"white\"", "material = \"gold\"")),
+        },
+        Case {
+            name: "scene-deeply-nested-array",
+            what: "an array nested 100 000 deep",
+            expect: Some(&["scene.toml:14:84: recursion limit exceeded"]),
+            setup: |d| {
+                let depth = 100_000;
+                scene_text(d, &format!("{BASE}x = {}{}\n", "[".repeat(depth), "]".repeat(depth)))
+            },
+        },
+        Case {
+            name: "scene-huge-array",
+            what: "a 2-million-element array (4 MiB)",
+            expect: Some(&["scene.toml:14:1: unknown field `x`"]),
+            setup: |d| {
+                let items = vec!["1"; 2_000_000].join(",");
+                scene_text(d, &format!("{BASE}x = [{items}]\n"))
+            },
+        },
+        Case {
+            name: "scene-over-16-mib",
+            what: "a 17 MiB scene file",
+            expect: Some(&["scene.toml: the scene file is larger than 16777216 bytes"]),
+            setup: |d| scene_text(d, &format!("{BASE}{}", "#".repeat(17 << 20))),
+        },
+        Case {
+            name: "mesh-unknown-extension",
+            what: "mesh `m.stl`",
+            expect: Some(&[MESH_AT, "m.stl: unknown mesh format"]),
+            setup: |d| with_mesh(d, "m.stl", OFF_TRI),
+        },
+        Case {
+            name: "ply-no-vertex-indices",
+            what: "PLY face element without `vertex_indices`",
+            expect: Some(&[MESH_AT, "m.ply: the face element has no 'vertex_indices'"]),
+            setup: |d| with_mesh(d, "m.ply", PLY_ASCII_HEADER.replace("vertex_indices", "corners") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        },
+        Case {
+            name: "obj-valid-reference",
+            what: "a valid OBJ triangle (control case)",
+            expect: None,
+            setup: |d| with_mesh(d, "m.obj", OBJ_TRI),
+        },
+    ]
+}
+
+struct Outcome {
+    code: Option<i32>,
+    stderr: String,
+    output_exists: bool,
+}
+
+fn run(case: &Case) -> Outcome {
+    let dir = tempfile::tempdir().unwrap();
+    let run = (case.setup)(dir.path());
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let png = out_dir.join("image.png");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustic"));
+    cmd.arg("render")
+        .arg(&run.scene)
+        .arg("-o")
+        .arg(&png)
+        .args(["--accel", "kdtree", "--quiet", "--threads", "1"])
+        .args(&run.args)
+        .env_remove("CAUSTIC_MEMORY_LIMIT");
+    for (k, v) in &run.env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().unwrap();
+    Outcome {
+        code: out.status.code(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        output_exists: std::fs::read_dir(&out_dir).unwrap().next().is_some(),
+    }
+}
+
+#[test]
+fn hostile_inputs_fail_cleanly() {
+    let cases = cases();
+    // Run the cases on two threads: each is a separate process.
+    let results: Vec<(usize, Outcome)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..2)
+            .map(|t| {
+                let cases = &cases;
+                s.spawn(move || {
+                    (t..cases.len())
+                        .step_by(2)
+                        .map(|i| (i, run(&cases[i])))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
+    });
+    let mut failures = Vec::new();
+    for (i, o) in results {
+        let case = &cases[i];
+        match case.expect {
+            None => {
+                if o.code != Some(0) || !o.output_exists {
+                    failures.push(format!(
+                        "{}: expected a render, got {:?}: {}",
+                        case.name, o.code, o.stderr
+                    ));
+                }
+            }
+            Some(needles) => {
+                let lines: Vec<&str> = o.stderr.lines().collect();
+                let missing: Vec<&&str> = needles.iter().filter(|n| !o.stderr.contains(**n)).collect();
+                if o.code != Some(2) || !missing.is_empty() || o.output_exists || lines.len() != 1 {
+                    failures.push(format!(
+                        "{}: exit {:?}, output written: {}, missing {:?} in:\n{}",
+                        case.name, o.code, o.output_exists, missing, o.stderr
+                    ));
+                }
+                if o.stderr.contains("panicked") {
+                    failures.push(format!("{}: panicked", case.name));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} case(s) failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn catalogue_has_at_least_30_distinct_cases() {
+    let cases = cases();
+    let mut names: Vec<&str> = cases.iter().map(|c| c.name).collect();
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), cases.len(), "duplicate case names");
+    assert!(cases.iter().filter(|c| c.expect.is_some()).count() >= 30);
+}
+
+/// The catalogue as Markdown: `docs/hostile-inputs.md` is this text.
+fn catalogue_markdown() -> String {
+    let cases = cases();
+    let failing = cases.iter().filter(|c| c.expect.is_some()).count();
+    let mut md = format!(
+        "# Hostile inputs\n\n\
+         Generated from `tests/hostile_inputs.rs` (regenerate with\n\
+         `UPDATE_HOSTILE_DOC=1 cargo test --test hostile_inputs catalogue_is_documented`).\n\n\
+         Each case runs `caustic render SCENE -o out/image.png --accel kdtree` on inputs\n\
+         generated in a temporary directory. {failing} of the {} cases must end with exit\n\
+         code 2, a one-line message containing every quoted fragment (`…` separates\n\
+         fragments; the scene and mesh paths are prefixed by the temporary directory),\n\
+         and no output file; the others are legal and must render. Zero-area faces\n\
+         are legal: they are kept (never hit by the watertight test) and normals\n\
+         ignore them.\n\n\
+         | Case | Input | Expected |\n|---|---|---|\n",
+        cases.len()
+    );
+    for c in &cases {
+        let expected = match c.expect {
+            None => "loads and renders (exit 0, image written)".to_string(),
+            Some(needles) => needles
+                .iter()
+                .map(|n| format!("`{}`", n.replace('|', "\\|").replace('`', "'")))
+                .collect::<Vec<_>>()
+                .join(" … "),
+        };
+        md += &format!("| `{}` | {} | {} |\n", c.name, c.what.replace('|', "\\|"), expected);
+    }
+    md
+}
+
+#[test]
+fn catalogue_is_documented() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/hostile-inputs.md");
+    let want = catalogue_markdown();
+    if std::env::var_os("UPDATE_HOSTILE_DOC").is_some() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let have = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        have == want,
+        "docs/hostile-inputs.md is out of date: run UPDATE_HOSTILE_DOC=1 cargo test --test hostile_inputs catalogue_is_documented"
+    );
+}
