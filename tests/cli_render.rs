@@ -267,6 +267,19 @@ fn bad_input_exits_2_with_a_clear_message() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("GiB"), "{}", stderr(&o));
+    // So is an spp that would never finish, even on a tiny image.
+    let o = caustic(&[
+        "render",
+        "scenes/test/shadow.toml",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "4294967295",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("samples per pixel"), "{}", stderr(&o));
     // An unwritable output is reported before rendering.
     let o = caustic(&[
         "render",

@@ -39,6 +39,9 @@ pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 pub const MAX_IMAGE_SIDE: u32 = 65536;
 /// Largest `width × height × spp` (camera samples of one render).
 pub const MAX_CAMERA_SAMPLES: u64 = 1 << 40;
+/// Most samples per pixel (2^20): beyond it a render never ends in practice,
+/// whatever the image size.
+pub const MAX_SPP: u32 = 1 << 20;
 /// Film memory budgeted per pixel (linear RGB sums and sums of squares in
 /// f64 plus a sample count, rounded up): used to refuse images whose film
 /// alone could not be allocated.
@@ -236,6 +239,11 @@ pub enum ImageLimit {
 /// Checks `width × height × spp` against the film-memory and sample limits;
 /// shared by the scene loader and the CLI's overrides.
 pub fn check_image_limits(width: u32, height: u32, spp: u32) -> Result<(), ImageLimit> {
+    if spp > MAX_SPP {
+        return Err(ImageLimit::Samples(format!(
+            "{spp} spp: at most {MAX_SPP} samples per pixel"
+        )));
+    }
     if width == 0 || height == 0 || spp == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(ImageLimit::Film(format!(
             "{width}×{height} pixels, {spp} spp: width and height must be in 1..={MAX_IMAGE_SIDE} and spp ≥ 1"
