@@ -90,7 +90,18 @@ fn cornell_walls_are_red_and_green_with_every_accelerator() {
         let (img, o) = render(
             &scene_path,
             &out,
-            &["--width", "192", "--height", "108", "--spp", "2", "--photons", "20000", "--accel", accel],
+            &[
+                "--width",
+                "192",
+                "--height",
+                "108",
+                "--spp",
+                "2",
+                "--photons",
+                "20000",
+                "--accel",
+                accel,
+            ],
         );
         assert_eq!((img.width(), img.height()), (w, h));
         let (rx, ry) = project(&cam, Vec3A::new(-2.5, 3.0, 0.5), w, h);

@@ -59,6 +59,9 @@ pub struct Photon {
     pub position: Vec3A,
     /// Unit direction toward where it came from (`−` its travel direction).
     pub incoming: Vec3A,
+    /// Geometric normal of the surface it landed on, turned toward the
+    /// side it arrived from (for the precomputed irradiance sites).
+    pub normal: Vec3A,
     /// Flux it carries (W per channel).
     pub power: Vec3A,
 }
@@ -188,6 +191,21 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
     Vec3A::new(x, y, z).normalize_or(Vec3A::Z)
 }
 
+/// Builds kiddo's immutable tree over `positions` (already in tree
+/// coordinates); items are indices into `positions`.
+pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> PhotonTree {
+    PhotonTree::new_from_slice(&positions)
+}
+
+/// Bytes held by a [`PhotonTree`] of `n` points: its leaves (positions and
+/// indices), stems and leaf extents (kiddo's layout: one f32 stem per
+/// power-of-two leaf slot, two u32 per leaf).
+pub(super) fn tree_bytes(n: usize) -> usize {
+    let leaves = n.div_ceil(BUCKET).max(1);
+    let stems = if leaves < 2 { 0 } else { leaves.next_power_of_two() };
+    n * (12 + 4) + leaves * 8 + stems * 4
+}
+
 /// The photon map.
 pub struct PhotonMap {
     pub(super) tree: PhotonTree,
@@ -195,6 +213,9 @@ pub struct PhotonMap {
     pub(super) records: Vec<PhotonRecord>,
     coarse: Vec<[u16; 3]>,
     bounds: Aabb,
+    /// Irradiance precomputed at a subset of the photons (Christensen
+    /// 1999), when [`PhotonMap::precompute_irradiance`] ran.
+    pub(super) precomputed: Option<super::precomputed::PrecomputedIrradiance>,
 }
 
 impl std::fmt::Debug for PhotonMap {
@@ -238,14 +259,14 @@ impl PhotonMap {
         for p in &mut positions {
             *p = to_tree(&rotation, Vec3A::from_array(*p));
         }
-        let tree = PhotonTree::new_from_slice(&positions);
-        drop(positions);
+        let tree = build_tree(positions);
         Self {
             tree,
             rotation,
             records,
             coarse,
             bounds,
+            precomputed: None,
         }
     }
 
@@ -276,13 +297,10 @@ impl PhotonMap {
     /// leaf slot, two u32 per leaf), the records and the coarse positions.
     pub fn memory_bytes(&self) -> usize {
         let n = self.len();
-        let leaves = n.div_ceil(BUCKET).max(1);
-        let stems = if leaves < 2 { 0 } else { leaves.next_power_of_two() };
-        n * (12 + 4)
-            + leaves * 8
-            + stems * 4
+        tree_bytes(n)
             + n * std::mem::size_of::<PhotonRecord>()
             + n * std::mem::size_of::<[u16; 3]>()
+            + self.precomputed.as_ref().map_or(0, |p| p.memory_bytes())
     }
 
     /// Total power of all stored photons (f64 accumulation).
@@ -364,6 +382,7 @@ mod tests {
             .map(|i| Photon {
                 position: Vec3A::new(i as f32 * 0.01, (i % 7) as f32, -(i as f32).sqrt()),
                 incoming: Vec3A::Y,
+                normal: Vec3A::Y,
                 power: Vec3A::ONE,
             })
             .collect();
