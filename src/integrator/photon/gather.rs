@@ -14,7 +14,6 @@
 
 use super::map::{to_tree, PhotonMap};
 use crate::math::Vec3A;
-use kiddo::SquaredEuclidean;
 use std::f32::consts::PI;
 use std::num::NonZero;
 
@@ -70,12 +69,9 @@ impl PhotonMap {
         if self.is_empty() || !self.near_bounds(p, g.max_radius) {
             return (Vec3A::ZERO, 0.0);
         }
-        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
-            &to_tree(&self.rotation, p),
-            g.max_radius * g.max_radius,
-            g.k,
-            false,
-        );
+        let found = self
+            .tree
+            .nearest_n_within(&to_tree(&self.rotation, p), g.max_radius * g.max_radius, g.k);
         if found.is_empty() {
             return (Vec3A::ZERO, 0.0);
         }

@@ -19,6 +19,7 @@
 //! is built, kiddo also holds the source positions (12 B) and a sort index
 //! (8 B, `usize`): the peak is [`PEAK_BYTES_PER_PHOTON`].
 
+use super::chunked::{chunk_depth, ChunkedTree};
 use crate::math::{Aabb, Mat3A, Vec3A};
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 
@@ -45,9 +46,11 @@ pub const BUCKET: usize = 32;
 /// Bytes held per stored photon once the map is built (see the module docs).
 pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 6.0 + 12.0 / BUCKET as f64;
 
-/// Bytes per photon at the peak of the build (the map, plus kiddo's copy of
-/// the source positions and its `usize` sort index), rounded up.
-pub const PEAK_BYTES_PER_PHOTON: u64 = 52;
+/// Bytes per photon at the peak of the build, rounded up: the chunks'
+/// positions (12), kiddo's leaves and `usize` sort index (24), the chunk
+/// order (4), records (8) and coarse positions (6), plus slack for the
+/// reordering of records and coarse positions that follows.
+pub const PEAK_BYTES_PER_PHOTON: u64 = 56;
 
 /// The k-d tree type: f32 coordinates, u32 photon indices, 3-D.
 pub type PhotonTree = ImmutableKdTree<f32, u32, 3, BUCKET>;
@@ -191,10 +194,16 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
     Vec3A::new(x, y, z).normalize_or(Vec3A::Z)
 }
 
-/// Builds kiddo's immutable tree over `positions` (already in tree
-/// coordinates); items are indices into `positions`.
-pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> PhotonTree {
-    PhotonTree::new_from_slice(&positions)
+/// Builds the chunked trees over `positions` (already in tree
+/// coordinates); see [`super::chunked`] for the returned order.
+pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> (ChunkedTree, Vec<u32>) {
+    let depth = chunk_depth(positions.len());
+    ChunkedTree::build(positions, depth)
+}
+
+/// `items` reordered so that `out[j] = items[order[j]]`.
+pub(super) fn reorder<T: Copy>(items: Vec<T>, order: &[u32]) -> Vec<T> {
+    order.iter().map(|&i| items[i as usize]).collect()
 }
 
 /// Bytes held by a [`PhotonTree`] of `n` points: its leaves (positions and
@@ -208,7 +217,7 @@ pub(super) fn tree_bytes(n: usize) -> usize {
 
 /// The photon map.
 pub struct PhotonMap {
-    pub(super) tree: PhotonTree,
+    pub(super) tree: ChunkedTree,
     pub(super) rotation: Mat3A,
     pub(super) records: Vec<PhotonRecord>,
     coarse: Vec<[u16; 3]>,
@@ -259,7 +268,9 @@ impl PhotonMap {
         for p in &mut positions {
             *p = to_tree(&rotation, Vec3A::from_array(*p));
         }
-        let tree = build_tree(positions);
+        let (tree, order) = build_tree(positions);
+        let records = reorder(records, &order);
+        let coarse = reorder(coarse, &order);
         Self {
             tree,
             rotation,

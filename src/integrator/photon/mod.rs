@@ -12,6 +12,7 @@
 //! `Rng::new(seed, Domain::Photon, i, 0)` and the photons are concatenated
 //! in index order, so the map is identical for any thread count.
 
+pub mod chunked;
 pub mod emit;
 pub mod gather;
 pub mod map;

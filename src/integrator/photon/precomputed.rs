@@ -3,16 +3,19 @@
 //! cone-filtered k-nearest estimate ([`PhotonMap::irradiance`]) is computed
 //! at every [`PRECOMPUTE_STRIDE`]-th stored photon, in parallel, and stored
 //! with that photon's surface normal and the radius of the disk it covered.
-//! A shading point then takes the estimate of its nearest site (one
-//! nearest-neighbour query instead of a k-nearest gather) when
+//! A shading point then interpolates the estimates of its
+//! [`INTERPOLATED_SITES`] nearest sites (an 8-nearest query instead of a
+//! 64-nearest gather and its filtering) when
 //!
-//! - the site lies within the site's own gather radius of the point (the
+//! - the nearest site lies within its own gather radius of the point (the
 //!   two estimates would share most of their photons), and
-//! - the site's normal is within [`NORMAL_COS`] of the point's (Christensen's
-//!   normal check: a corner's two walls, or a thin wall's two sides, keep
-//!   their own irradiance);
+//! - the sites' normals are within [`NORMAL_COS`] of the point's
+//!   (Christensen's normal check: a corner's two walls, or a thin wall's
+//!   two sides, keep their own irradiance);
 //!
-//! otherwise it falls back to the direct gather. The estimate is the same
+//! otherwise it falls back to the direct gather. Christensen takes the
+//! nearest site alone; its Voronoi cells showed as a mosaic on the
+//! underwater floor, hence the smooth interpolation. The estimate is the same
 //! kernel estimate, moved by less than its own radius: its expected value
 //! differs from the direct gather's only by that extra blur (the test
 //! `precomputed_matches_direct` bounds the difference).
@@ -20,12 +23,15 @@
 //! Memory per site: 16 bytes in the tree's leaves, 10 in the entry; one
 //! site per 8 photons adds ≈ 3.3 bytes per photon.
 
+use super::chunked::ChunkedTree;
 use super::gather::GatherParams;
-use super::map::{build_tree, decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, to_tree, tree_bytes};
-use super::map::{PhotonMap, PhotonTree};
+use super::map::PhotonMap;
+use super::map::{
+    build_tree, decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, reorder, to_tree, tree_bytes,
+};
 use crate::math::Vec3A;
-use kiddo::SquaredEuclidean;
 use rayon::prelude::*;
+use std::num::NonZero;
 
 /// One photon in this many carries a precomputed estimate. Christensen
 /// used every fourth; with the k = 64 gathers of the shipped scenes a
@@ -36,6 +42,9 @@ pub const PRECOMPUTE_STRIDE: usize = 8;
 /// Smallest cosine between the shading normal and a site's normal for the
 /// site's estimate to be used (≈ 25°).
 pub const NORMAL_COS: f32 = 0.9;
+
+/// Sites interpolated per shading point.
+pub const INTERPOLATED_SITES: usize = 8;
 
 /// Where an estimate is precomputed: a photon's position and the normal of
 /// the surface it landed on, turned toward the side it arrived from.
@@ -59,7 +68,7 @@ struct SiteEntry {
 
 /// The sites' tree and estimates.
 pub(super) struct PrecomputedIrradiance {
-    tree: PhotonTree,
+    tree: ChunkedTree,
     entries: Vec<SiteEntry>,
 }
 
@@ -69,24 +78,48 @@ impl PrecomputedIrradiance {
         tree_bytes(self.entries.len()) + self.entries.len() * std::mem::size_of::<SiteEntry>()
     }
 
-    /// The estimate at `p` (normal `n`): the nearest site's when usable,
-    /// else the direct gather.
+    /// The estimate at `p` (normal `n`): the [`INTERPOLATED_SITES`]
+    /// nearest sites' estimates, weighted by `1 − d²/d_max²` (`d_max` the
+    /// farthest of them: the weights, hence the result, vary continuously
+    /// with `p`, where the nearest site alone would show its Voronoi cells),
+    /// skipping sites whose normal differs; the direct gather when the
+    /// nearest site is beyond its own radius or no site's normal agrees.
     #[inline]
     pub(super) fn lookup(&self, map: &PhotonMap, p: Vec3A, n: Vec3A, g: &GatherParams) -> Vec3A {
         if self.entries.is_empty() || !map.near_bounds(p, g.max_radius) {
             return Vec3A::ZERO;
         }
-        let nb = self.tree.nearest_one::<SquaredEuclidean>(&to_tree(&map.rotation, p));
-        if nb.distance > g.max_radius * g.max_radius {
-            // No site within the maximum radius: at most a few unselected
-            // photons (fewer than the stride) could be, a negligible term
-            // next to the k a full estimate holds.
+        let found = self.tree.nearest_n_within(
+            &to_tree(&map.rotation, p),
+            g.max_radius * g.max_radius,
+            NonZero::new(INTERPOLATED_SITES).expect("constant > 0"),
+        );
+        // No site within the maximum radius: at most a few unselected
+        // photons (fewer than the stride) could be, a negligible term next
+        // to the k a full estimate holds.
+        let Some(nearest) = found
+            .iter()
+            .min_by(|a, b| a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item)))
+        else {
             return Vec3A::ZERO;
+        };
+        let r = self.entries[nearest.item as usize].radius as f32 / 65535.0 * g.max_radius;
+        if nearest.distance > r * r {
+            return map.irradiance(p, n, g);
         }
-        let e = self.entries[nb.item as usize];
-        let r = e.radius as f32 / 65535.0 * g.max_radius;
-        if nb.distance <= r * r && decode_octahedral(e.normal).dot(n) >= NORMAL_COS {
-            decode_rgbe(e.rgbe)
+        let d_max2 = found.iter().fold(0.0f32, |m, nb| m.max(nb.distance)) * 1.0001 + f32::MIN_POSITIVE;
+        let (mut sum, mut weights) = (Vec3A::ZERO, 0.0f32);
+        for nb in &found {
+            let e = self.entries[nb.item as usize];
+            if decode_octahedral(e.normal).dot(n) < NORMAL_COS {
+                continue;
+            }
+            let w = 1.0 - nb.distance / d_max2;
+            sum += decode_rgbe(e.rgbe) * w;
+            weights += w;
+        }
+        if weights > 0.0 {
+            sum / weights
         } else {
             map.irradiance(p, n, g)
         }
@@ -114,7 +147,8 @@ impl PhotonMap {
         let rotation = self.rotation;
         let positions: Vec<[f32; 3]> = sites.iter().map(|s| to_tree(&rotation, s.position)).collect();
         drop(sites);
-        let tree = build_tree(positions);
+        let (tree, order) = build_tree(positions);
+        let entries = reorder(entries, &order);
         self.precomputed = Some(PrecomputedIrradiance { tree, entries });
     }
 
@@ -129,7 +163,6 @@ mod tests {
     use super::super::map::Photon;
     use super::*;
     use crate::math::rng::{Domain, Rng};
-    use std::num::NonZero;
 
     #[test]
     fn entries_are_ten_bytes() {
