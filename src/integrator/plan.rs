@@ -82,6 +82,8 @@ pub enum PhotonPlan {
         max_radius: f32,
         /// Cone-filter constant.
         cone_k: f32,
+        /// How shading points evaluate the estimate.
+        gather: super::photon::GatherMode,
     },
     /// No object is a mirror or dielectric: there is no caustic.
     NoSpecularCaster,
@@ -206,6 +208,7 @@ impl RenderPlan {
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
+                gather: super::photon::GatherMode::default(),
             }
         };
         let fog = match &s.medium {
@@ -326,10 +329,11 @@ impl fmt::Display for RenderPlan {
                 k,
                 max_radius,
                 cone_k,
+                gather,
             } => writeln!(
                 f,
                 "  photon pass: ran, {count} photons, emission restricted to {casters} specular caster(s); \
-                 gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}"
+                 gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}, {gather}"
             )?,
             PhotonPlan::NoSpecularCaster => writeln!(f, "  photon pass: skipped (no specular caster)")?,
             PhotonPlan::NoLights => writeln!(f, "  photon pass: skipped (no lights)")?,

@@ -3,7 +3,7 @@
 //! tiles are assembled in a fixed order, so the image is bit-identical for
 //! any number of threads.
 
-use super::photon::{photon_pass, PhotonMap, PhotonStats};
+use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
@@ -14,6 +14,7 @@ use crate::math::{Rng, Vec2, Vec3, Vec3A};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::fmt;
+use std::num::NonZero;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -111,7 +112,24 @@ pub fn render(
 ) -> RenderOutput {
     let start = Instant::now();
     let photons = match plan.photons {
-        PhotonPlan::Run { count, .. } => Some(photon_pass(scene, accel, count)),
+        PhotonPlan::Run {
+            count,
+            k,
+            max_radius,
+            cone_k,
+            gather,
+            ..
+        } => {
+            let precompute = match gather {
+                GatherMode::Direct => None,
+                GatherMode::Precomputed => Some(GatherParams {
+                    k: NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
+                    max_radius,
+                    cone_k,
+                }),
+            };
+            Some(photon_pass_with(scene, accel, count, precompute.as_ref()))
+        }
         _ => None,
     };
     let (map, photon_stats) = match photons {

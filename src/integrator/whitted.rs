@@ -339,7 +339,7 @@ impl<'a> Whitted<'a> {
         }
         if !highlights_only && m.is_diffuse() {
             if let Some((map, g)) = &self.caustics {
-                out += m.diffuse * (1.0 / PI) * map.irradiance(si.p, ng, g);
+                out += m.diffuse * (1.0 / PI) * map.caustic_irradiance(si.p, ng, g);
             }
         }
         out

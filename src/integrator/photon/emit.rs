@@ -274,6 +274,9 @@ impl<'a> PhotonTracer<'a> {
                         out.photon = Some(Photon {
                             position: si.p,
                             incoming,
+                            // The side the photon arrived on: where the
+                            // precomputed irradiance at this photon applies.
+                            normal: if si.ng.dot(incoming) >= 0.0 { si.ng } else { -si.ng },
                             power: power / (1.0 - r),
                         });
                     }

@@ -14,7 +14,6 @@
 
 use super::map::{to_tree, PhotonMap};
 use crate::math::Vec3A;
-use kiddo::SquaredEuclidean;
 use std::f32::consts::PI;
 use std::num::NonZero;
 
@@ -46,18 +45,35 @@ impl PhotonMap {
     /// Irradiance at `p` on a surface whose normal, turned toward the
     /// viewer, is `n`: only photons that arrived from that side count (a
     /// thin wall's other side, or the floor under a table, stay separate).
+    /// Always the full k-nearest gather (the `direct` mode).
     pub fn irradiance(&self, p: Vec3A, n: Vec3A, g: &GatherParams) -> Vec3A {
-        if self.is_empty() {
-            return Vec3A::ZERO;
+        self.gather(p, n, g).0
+    }
+
+    /// The caustic irradiance the renderer uses: the precomputed estimate
+    /// when [`PhotonMap::precompute_irradiance`] ran, else
+    /// [`PhotonMap::irradiance`].
+    #[inline]
+    pub fn caustic_irradiance(&self, p: Vec3A, n: Vec3A, g: &GatherParams) -> Vec3A {
+        match &self.precomputed {
+            Some(pre) => pre.lookup(self, p, n, g),
+            None => self.irradiance(p, n, g),
         }
-        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
-            &to_tree(&self.rotation, p),
-            g.max_radius * g.max_radius,
-            g.k,
-            false,
-        );
+    }
+
+    /// The direct estimate and the radius of the disk it divided by (0
+    /// when nothing was found).
+    pub(super) fn gather(&self, p: Vec3A, n: Vec3A, g: &GatherParams) -> (Vec3A, f32) {
+        // Early out: no photon can lie within the radius of a point farther
+        // than it from the map's bounds (most of an image, for caustics).
+        if self.is_empty() || !self.near_bounds(p, g.max_radius) {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let found = self
+            .tree
+            .nearest_n_within(&to_tree(&self.rotation, p), g.max_radius * g.max_radius, g.k);
         if found.is_empty() {
-            return Vec3A::ZERO;
+            return (Vec3A::ZERO, 0.0);
         }
         let r2 = if found.len() >= g.k.get() {
             found.iter().fold(0.0f32, |m, nb| m.max(nb.distance))
@@ -65,7 +81,7 @@ impl PhotonMap {
             g.max_radius * g.max_radius
         };
         if r2.is_nan() || r2 <= 0.0 {
-            return Vec3A::ZERO;
+            return (Vec3A::ZERO, 0.0);
         }
         let r = r2.sqrt();
         let mut sum = Vec3A::ZERO;
@@ -76,7 +92,15 @@ impl PhotonMap {
             }
             sum += rec.power() * cone_weight(nb.distance.sqrt(), r, g.cone_k);
         }
-        sum / (cone_normalisation(g.cone_k) * PI * r2)
+        (sum / (cone_normalisation(g.cone_k) * PI * r2), r)
+    }
+
+    /// True when `p` is within `radius` of the map's bounds.
+    #[inline]
+    pub(super) fn near_bounds(&self, p: Vec3A, radius: f32) -> bool {
+        let b = self.bounds();
+        let d = (b.min - p).max(p - b.max).max(Vec3A::ZERO);
+        d.length_squared() <= radius * radius
     }
 }
 
@@ -118,6 +142,7 @@ mod tests {
                 Photon {
                     position: Vec3A::new((a - 0.5) * side, 0.0, (b - 0.5) * side),
                     incoming: Vec3A::new(0.3, 0.9, 0.1).normalize(),
+                    normal: Vec3A::Y,
                     power,
                 }
             })

@@ -19,6 +19,7 @@
 //! is built, kiddo also holds the source positions (12 B) and a sort index
 //! (8 B, `usize`): the peak is [`PEAK_BYTES_PER_PHOTON`].
 
+use super::chunked::{chunk_depth, ChunkedTree};
 use crate::math::{Aabb, Mat3A, Vec3A};
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 
@@ -45,9 +46,11 @@ pub const BUCKET: usize = 32;
 /// Bytes held per stored photon once the map is built (see the module docs).
 pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 6.0 + 12.0 / BUCKET as f64;
 
-/// Bytes per photon at the peak of the build (the map, plus kiddo's copy of
-/// the source positions and its `usize` sort index), rounded up.
-pub const PEAK_BYTES_PER_PHOTON: u64 = 52;
+/// Bytes per photon at the peak of the build, rounded up: the chunks'
+/// positions (12), kiddo's leaves and `usize` sort index (24), the chunk
+/// order (4), records (8) and coarse positions (6), plus slack for the
+/// reordering of records and coarse positions that follows.
+pub const PEAK_BYTES_PER_PHOTON: u64 = 56;
 
 /// The k-d tree type: f32 coordinates, u32 photon indices, 3-D.
 pub type PhotonTree = ImmutableKdTree<f32, u32, 3, BUCKET>;
@@ -59,6 +62,9 @@ pub struct Photon {
     pub position: Vec3A,
     /// Unit direction toward where it came from (`−` its travel direction).
     pub incoming: Vec3A,
+    /// Geometric normal of the surface it landed on, turned toward the
+    /// side it arrived from (for the precomputed irradiance sites).
+    pub normal: Vec3A,
     /// Flux it carries (W per channel).
     pub power: Vec3A,
 }
@@ -188,13 +194,37 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
     Vec3A::new(x, y, z).normalize_or(Vec3A::Z)
 }
 
+/// Builds the chunked trees over `positions` (already in tree
+/// coordinates); see [`super::chunked`] for the returned order.
+pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> (ChunkedTree, Vec<u32>) {
+    let depth = chunk_depth(positions.len());
+    ChunkedTree::build(positions, depth)
+}
+
+/// `items` reordered so that `out[j] = items[order[j]]`.
+pub(super) fn reorder<T: Copy>(items: Vec<T>, order: &[u32]) -> Vec<T> {
+    order.iter().map(|&i| items[i as usize]).collect()
+}
+
+/// Bytes held by a [`PhotonTree`] of `n` points: its leaves (positions and
+/// indices), stems and leaf extents (kiddo's layout: one f32 stem per
+/// power-of-two leaf slot, two u32 per leaf).
+pub(super) fn tree_bytes(n: usize) -> usize {
+    let leaves = n.div_ceil(BUCKET).max(1);
+    let stems = if leaves < 2 { 0 } else { leaves.next_power_of_two() };
+    n * (12 + 4) + leaves * 8 + stems * 4
+}
+
 /// The photon map.
 pub struct PhotonMap {
-    pub(super) tree: PhotonTree,
+    pub(super) tree: ChunkedTree,
     pub(super) rotation: Mat3A,
     pub(super) records: Vec<PhotonRecord>,
     coarse: Vec<[u16; 3]>,
     bounds: Aabb,
+    /// Irradiance precomputed at a subset of the photons (Christensen
+    /// 1999), when [`PhotonMap::precompute_irradiance`] ran.
+    pub(super) precomputed: Option<super::precomputed::PrecomputedIrradiance>,
 }
 
 impl std::fmt::Debug for PhotonMap {
@@ -238,14 +268,16 @@ impl PhotonMap {
         for p in &mut positions {
             *p = to_tree(&rotation, Vec3A::from_array(*p));
         }
-        let tree = PhotonTree::new_from_slice(&positions);
-        drop(positions);
+        let (tree, order) = build_tree(positions);
+        let records = reorder(records, &order);
+        let coarse = reorder(coarse, &order);
         Self {
             tree,
             rotation,
             records,
             coarse,
             bounds,
+            precomputed: None,
         }
     }
 
@@ -276,13 +308,10 @@ impl PhotonMap {
     /// leaf slot, two u32 per leaf), the records and the coarse positions.
     pub fn memory_bytes(&self) -> usize {
         let n = self.len();
-        let leaves = n.div_ceil(BUCKET).max(1);
-        let stems = if leaves < 2 { 0 } else { leaves.next_power_of_two() };
-        n * (12 + 4)
-            + leaves * 8
-            + stems * 4
+        tree_bytes(n)
             + n * std::mem::size_of::<PhotonRecord>()
             + n * std::mem::size_of::<[u16; 3]>()
+            + self.precomputed.as_ref().map_or(0, |p| p.memory_bytes())
     }
 
     /// Total power of all stored photons (f64 accumulation).
@@ -364,6 +393,7 @@ mod tests {
             .map(|i| Photon {
                 position: Vec3A::new(i as f32 * 0.01, (i % 7) as f32, -(i as f32).sqrt()),
                 incoming: Vec3A::Y,
+                normal: Vec3A::Y,
                 power: Vec3A::ONE,
             })
             .collect();

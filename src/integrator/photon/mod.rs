@@ -12,13 +12,16 @@
 //! `Rng::new(seed, Domain::Photon, i, 0)` and the photons are concatenated
 //! in index order, so the map is identical for any thread count.
 
+pub mod chunked;
 pub mod emit;
 pub mod gather;
 pub mod map;
+pub mod precomputed;
 
 pub use emit::{specular_casters, Caster, PhotonTracer};
 pub use gather::GatherParams;
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
+pub use precomputed::{IrradianceSite, PRECOMPUTE_STRIDE};
 
 use crate::accel::Accel;
 use crate::scene::Scene;
@@ -31,6 +34,27 @@ const CHUNK: u64 = 4096;
 /// Photons traced before their results are packed into the final arrays:
 /// bounds the transient memory of the per-chunk vectors.
 const BATCH: u64 = 1 << 20;
+
+/// How the caustic estimate is evaluated at shading points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GatherMode {
+    /// A k-nearest cone-filter gather at every shading point.
+    Direct,
+    /// The estimate precomputed at every [`PRECOMPUTE_STRIDE`]-th photon;
+    /// shading points take their nearest site's (normal check, direct
+    /// gather as fallback: Christensen 1999, see [`precomputed`]).
+    #[default]
+    Precomputed,
+}
+
+impl fmt::Display for GatherMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GatherMode::Direct => write!(f, "direct gathers"),
+            GatherMode::Precomputed => write!(f, "precomputed irradiance (1 site per {PRECOMPUTE_STRIDE} photons)"),
+        }
+    }
+}
 
 /// What the photon pass did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -45,6 +69,10 @@ pub struct PhotonStats {
     pub trace_time: Duration,
     /// Wall time of the k-d tree build.
     pub build_time: Duration,
+    /// Sites with a precomputed irradiance estimate (0: direct gathers).
+    pub precomputed_sites: u64,
+    /// Wall time of the precomputation (estimates and the sites' tree).
+    pub precompute_time: Duration,
     /// Bytes held by the map.
     pub memory_bytes: usize,
 }
@@ -54,12 +82,14 @@ impl fmt::Display for PhotonStats {
         write!(
             f,
             "photon pass: {} emitted, {} stored, {} rays, traced in {:.3} s, k-d tree built in {:.3} s, \
-             {:.1} MiB ({:.1} bytes per photon)",
+             {} irradiance sites precomputed in {:.3} s, {:.1} MiB ({:.1} bytes per photon)",
             self.emitted,
             self.stored,
             self.rays,
             self.trace_time.as_secs_f64(),
             self.build_time.as_secs_f64(),
+            self.precomputed_sites,
+            self.precompute_time.as_secs_f64(),
             self.memory_bytes as f64 / (1024.0 * 1024.0),
             if self.stored > 0 {
                 self.memory_bytes as f64 / self.stored as f64
@@ -71,12 +101,25 @@ impl fmt::Display for PhotonStats {
 }
 
 /// Emits `count` photons, traces them and builds the caustic map, on the
-/// current rayon pool.
+/// current rayon pool (direct gathers: no precomputation).
 pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
+    photon_pass_with(scene, accel, count, None)
+}
+
+/// [`photon_pass`], then, with `precompute`, the irradiance at every
+/// [`PRECOMPUTE_STRIDE`]-th stored photon (Christensen 1999; see
+/// [`precomputed`]).
+pub fn photon_pass_with(
+    scene: &Scene,
+    accel: &dyn Accel,
+    count: u64,
+    precompute: Option<&GatherParams>,
+) -> (PhotonMap, PhotonStats) {
     let start = Instant::now();
     let tracer = PhotonTracer::new(scene, accel, count);
     let mut positions: Vec<[f32; 3]> = Vec::new();
     let mut records: Vec<PhotonRecord> = Vec::new();
+    let mut sites: Vec<IrradianceSite> = Vec::new();
     let mut rays = 0u64;
     let mut batch_start = 0u64;
     while batch_start < count {
@@ -103,6 +146,20 @@ pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, 
             .collect();
         for (photons, r) in results {
             rays += r;
+            if precompute.is_some() {
+                // Every STRIDE-th photon in stored order (deterministic).
+                let first = positions.len();
+                sites.extend(
+                    photons
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| (first + j) % PRECOMPUTE_STRIDE == 0)
+                        .map(|(_, p)| IrradianceSite {
+                            position: p.position,
+                            normal: p.normal,
+                        }),
+                );
+            }
             positions.extend(photons.iter().map(|p| p.position.to_array()));
             records.extend(photons.iter().map(|p| PhotonRecord::new(p.power, p.incoming)));
         }
@@ -113,13 +170,22 @@ pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, 
     let trace_time = start.elapsed();
     let build_start = Instant::now();
     let stored = positions.len() as u64;
-    let map = PhotonMap::build(positions, records);
+    let mut map = PhotonMap::build(positions, records);
+    let build_time = build_start.elapsed();
+    let precompute_start = Instant::now();
+    let precomputed_sites = sites.len() as u64;
+    if let Some(g) = precompute {
+        sites.shrink_to_fit();
+        map.precompute_irradiance(sites, g);
+    }
     let stats = PhotonStats {
         emitted: count,
         stored,
         rays,
         trace_time,
-        build_time: build_start.elapsed(),
+        build_time,
+        precomputed_sites,
+        precompute_time: precompute_start.elapsed(),
         memory_bytes: map.memory_bytes(),
     };
     (map, stats)

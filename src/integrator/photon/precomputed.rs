@@ -1,0 +1,259 @@
+//! Precomputed irradiance at photon positions (Christensen 1999, "Faster
+//! Photon Map Global Illumination", JGT 4(3)): once the map is built, the
+//! cone-filtered k-nearest estimate ([`PhotonMap::irradiance`]) is computed
+//! at every [`PRECOMPUTE_STRIDE`]-th stored photon, in parallel, and stored
+//! with that photon's surface normal and the radius of the disk it covered.
+//! A shading point then interpolates the estimates of its
+//! [`INTERPOLATED_SITES`] nearest sites (an 8-nearest query instead of a
+//! 64-nearest gather and its filtering) when
+//!
+//! - the nearest site lies within its own gather radius of the point (the
+//!   two estimates would share most of their photons), and
+//! - the sites' normals are within [`NORMAL_COS`] of the point's
+//!   (Christensen's normal check: a corner's two walls, or a thin wall's
+//!   two sides, keep their own irradiance);
+//!
+//! otherwise it falls back to the direct gather. Christensen takes the
+//! nearest site alone; its Voronoi cells showed as a mosaic on the
+//! underwater floor, hence the smooth interpolation. The estimate is the same
+//! kernel estimate, moved by less than its own radius: its expected value
+//! differs from the direct gather's only by that extra blur (the test
+//! `precomputed_matches_direct` bounds the difference).
+//!
+//! Memory per site: 16 bytes in the tree's leaves, 10 in the entry; one
+//! site per 8 photons adds ≈ 3.3 bytes per photon.
+
+use super::chunked::ChunkedTree;
+use super::gather::GatherParams;
+use super::map::PhotonMap;
+use super::map::{
+    build_tree, decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, reorder, to_tree, tree_bytes,
+};
+use crate::math::Vec3A;
+use rayon::prelude::*;
+use std::num::NonZero;
+
+/// One photon in this many carries a precomputed estimate. Christensen
+/// used every fourth; with the k = 64 gathers of the shipped scenes a
+/// site's disk still holds ≈ 8 sites, and 8 keeps the map near 32 bytes
+/// per photon.
+pub const PRECOMPUTE_STRIDE: usize = 8;
+
+/// Smallest cosine between the shading normal and a site's normal for the
+/// site's estimate to be used (≈ 25°).
+pub const NORMAL_COS: f32 = 0.9;
+
+/// Sites interpolated per shading point.
+pub const INTERPOLATED_SITES: usize = 8;
+
+/// Where an estimate is precomputed: a photon's position and the normal of
+/// the surface it landed on, turned toward the side it arrived from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IrradianceSite {
+    /// Photon position.
+    pub position: Vec3A,
+    /// Unit surface normal on the photon's side.
+    pub normal: Vec3A,
+}
+
+/// A precomputed estimate: RGBE irradiance, octahedral normal and the
+/// gather radius as a fraction of the maximum radius (rounded up).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
+struct SiteEntry {
+    rgbe: [u8; 4],
+    normal: [u16; 2],
+    radius: u16,
+}
+
+/// The sites' tree and estimates.
+pub(super) struct PrecomputedIrradiance {
+    tree: ChunkedTree,
+    entries: Vec<SiteEntry>,
+}
+
+impl PrecomputedIrradiance {
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        tree_bytes(self.entries.len()) + self.entries.len() * std::mem::size_of::<SiteEntry>()
+    }
+
+    /// The estimate at `p` (normal `n`): the [`INTERPOLATED_SITES`]
+    /// nearest sites' estimates, weighted by `1 − d²/d_max²` (`d_max` the
+    /// farthest of them: the weights, hence the result, vary continuously
+    /// with `p`, where the nearest site alone would show its Voronoi cells),
+    /// skipping sites whose normal differs; the direct gather when the
+    /// nearest site is beyond its own radius or no site's normal agrees.
+    #[inline]
+    pub(super) fn lookup(&self, map: &PhotonMap, p: Vec3A, n: Vec3A, g: &GatherParams) -> Vec3A {
+        if self.entries.is_empty() || !map.near_bounds(p, g.max_radius) {
+            return Vec3A::ZERO;
+        }
+        let found = self.tree.nearest_n_within(
+            &to_tree(&map.rotation, p),
+            g.max_radius * g.max_radius,
+            NonZero::new(INTERPOLATED_SITES).expect("constant > 0"),
+        );
+        // No site within the maximum radius: at most a few unselected
+        // photons (fewer than the stride) could be, a negligible term next
+        // to the k a full estimate holds.
+        let Some(nearest) = found
+            .iter()
+            .min_by(|a, b| a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item)))
+        else {
+            return Vec3A::ZERO;
+        };
+        let r = self.entries[nearest.item as usize].radius as f32 / 65535.0 * g.max_radius;
+        if nearest.distance > r * r {
+            return map.irradiance(p, n, g);
+        }
+        let d_max2 = found.iter().fold(0.0f32, |m, nb| m.max(nb.distance)) * 1.0001 + f32::MIN_POSITIVE;
+        let (mut sum, mut weights) = (Vec3A::ZERO, 0.0f32);
+        for nb in &found {
+            let e = self.entries[nb.item as usize];
+            if decode_octahedral(e.normal).dot(n) < NORMAL_COS {
+                continue;
+            }
+            let w = 1.0 - nb.distance / d_max2;
+            sum += decode_rgbe(e.rgbe) * w;
+            weights += w;
+        }
+        if weights > 0.0 {
+            sum / weights
+        } else {
+            map.irradiance(p, n, g)
+        }
+    }
+}
+
+impl PhotonMap {
+    /// Precomputes the irradiance at `sites` (in parallel, deterministic:
+    /// each site's estimate depends only on the map) so that
+    /// [`PhotonMap::caustic_irradiance`] uses them from now on.
+    pub fn precompute_irradiance(&mut self, sites: Vec<IrradianceSite>, g: &GatherParams) {
+        assert!(sites.len() <= u32::MAX as usize, "too many sites for u32 indices");
+        let entries: Vec<SiteEntry> = sites
+            .par_iter()
+            .map(|s| {
+                let (e, r) = self.gather(s.position, s.normal, g);
+                let radius = (r / g.max_radius * 65535.0).ceil().clamp(0.0, 65535.0) as u16;
+                SiteEntry {
+                    rgbe: encode_rgbe(e),
+                    normal: encode_octahedral(s.normal),
+                    radius,
+                }
+            })
+            .collect();
+        let rotation = self.rotation;
+        let positions: Vec<[f32; 3]> = sites.iter().map(|s| to_tree(&rotation, s.position)).collect();
+        drop(sites);
+        let (tree, order) = build_tree(positions);
+        let entries = reorder(entries, &order);
+        self.precomputed = Some(PrecomputedIrradiance { tree, entries });
+    }
+
+    /// Number of precomputed sites (0 when none were computed).
+    pub fn precomputed_sites(&self) -> usize {
+        self.precomputed.as_ref().map_or(0, |p| p.entries.len())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::map::Photon;
+    use super::*;
+    use crate::math::rng::{Domain, Rng};
+
+    #[test]
+    fn entries_are_ten_bytes() {
+        assert_eq!(std::mem::size_of::<SiteEntry>(), 10);
+    }
+
+    /// A caustic-like distribution (a bright Gaussian spot on a floor, and
+    /// a wall at right angles): the precomputed estimate's mean over many
+    /// points matches the direct gather's within 4% (the nearest site leans toward the denser, brighter side of a slope: +2.3% here), its RMS error against
+    /// the exact irradiance is at most 1.25 times the direct gather's, and
+    /// the wall's photons do not leak onto the floor.
+    #[test]
+    fn precomputed_matches_direct() {
+        let mut rng = Rng::new(9, Domain::Analysis, 0, 0);
+        let mut photons = Vec::new();
+        for _ in 0..200_000 {
+            let (a, b) = rng.f32x2();
+            // Box–Muller: a spot of standard deviation 0.3 at the origin.
+            let r = (-2.0 * (1.0 - a).ln()).sqrt() * 0.3;
+            let phi = b * std::f32::consts::TAU;
+            photons.push(Photon {
+                position: Vec3A::new(r * phi.cos(), 0.0, r * phi.sin()),
+                incoming: Vec3A::Y,
+                normal: Vec3A::Y,
+                power: Vec3A::splat(1e-5),
+            });
+        }
+        for _ in 0..200_000 {
+            // A wall at x = 1 lit from −x.
+            let (c, d) = rng.f32x2();
+            photons.push(Photon {
+                position: Vec3A::new(1.0, c, d - 0.5),
+                incoming: -Vec3A::X,
+                normal: -Vec3A::X,
+                power: Vec3A::splat(1e-5),
+            });
+        }
+        let sites: Vec<IrradianceSite> = photons
+            .iter()
+            .step_by(PRECOMPUTE_STRIDE)
+            .map(|p| IrradianceSite {
+                position: p.position,
+                normal: p.normal,
+            })
+            .collect();
+        let g = GatherParams {
+            k: NonZero::new(64).unwrap(),
+            max_radius: 0.2,
+            cone_k: 1.1,
+        };
+        let mut map = PhotonMap::from_photons(&photons);
+        let direct = |m: &PhotonMap, p: Vec3A, n: Vec3A| m.irradiance(p, n, &g);
+        let mut qs = Vec::new();
+        for i in 0..2000 {
+            let (a, b) = rng.f32x2();
+            let _ = i;
+            qs.push(Vec3A::new(a * 1.6 - 0.8, 0.0, b * 1.6 - 0.8));
+        }
+        let reference: Vec<Vec3A> = qs.iter().map(|&q| direct(&map, q, Vec3A::Y)).collect();
+        map.precompute_irradiance(sites, &g);
+        assert_eq!(map.precomputed_sites(), 400_000 / PRECOMPUTE_STRIDE);
+        let (mut sum_d, mut sum_p, mut err_d, mut err_p) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        // The spot's exact irradiance: 2 W in a Gaussian of σ = 0.3.
+        let sigma2 = 0.09f64;
+        let exact = |q: Vec3A| {
+            let r2 = (q.x * q.x + q.z * q.z) as f64;
+            2.0 / (std::f64::consts::TAU * sigma2) * (-r2 / (2.0 * sigma2)).exp()
+        };
+        for (q, e) in qs.iter().zip(&reference) {
+            let pre = map.caustic_irradiance(*q, Vec3A::Y, &g);
+            sum_d += e.x as f64;
+            sum_p += pre.x as f64;
+            err_d += (e.x as f64 - exact(*q)).powi(2);
+            err_p += (pre.x as f64 - exact(*q)).powi(2);
+        }
+        assert!((sum_p / sum_d - 1.0).abs() < 0.04, "means {sum_p} vs {sum_d}");
+        assert!(err_p <= 1.25 * 1.25 * err_d, "squared errors {err_p} vs direct {err_d}");
+        // Near the wall's foot, on the floor: the spot's faint tail
+        // (exactly 0.019), not the wall's irradiance (2).
+        let foot = Vec3A::new(0.97, 0.0, 0.0);
+        let pre = map.caustic_irradiance(foot, Vec3A::Y, &g);
+        assert!(pre.x < 0.1, "the wall leaks onto the floor: {pre}");
+        // On the wall, facing −x: the wall's estimate, not the floor's.
+        let w = Vec3A::new(1.0, 0.5, 0.0);
+        let pre = map.caustic_irradiance(w, -Vec3A::X, &g);
+        let d = map.irradiance(w, -Vec3A::X, &g);
+        assert!((pre.x / d.x - 1.0).abs() < 0.15, "{pre} vs {d}");
+        // Far away: nothing.
+        assert_eq!(
+            map.caustic_irradiance(Vec3A::new(0.0, 5.0, 0.0), Vec3A::Y, &g),
+            Vec3A::ZERO
+        );
+    }
+}
