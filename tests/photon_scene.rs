@@ -98,3 +98,15 @@ fn bad_photon_medium_and_water_values_are_errors() {
         assert!(e.starts_with("t.toml:"), "{e}");
     }
 }
+
+#[test]
+fn gather_mode_is_read_and_checked() {
+    use caustic::scene::GatherMode;
+    let scene = |mode: &str| format!("{HEAD}[photons]\ngather = \"{mode}\"\n");
+    let direct = parse_scene(&scene("direct"), Path::new("t.toml")).unwrap();
+    assert_eq!(direct.settings.photons.gather, GatherMode::Direct);
+    let pre = parse_scene(&scene("precomputed"), Path::new("t.toml")).unwrap();
+    assert_eq!(pre.settings.photons.gather, GatherMode::Precomputed);
+    let e = error(&scene("fast"));
+    assert!(e.contains("t.toml:6:") && e.contains("fast"), "{e}");
+}

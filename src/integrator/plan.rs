@@ -208,7 +208,7 @@ impl RenderPlan {
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
-                gather: super::photon::GatherMode::default(),
+                gather: ps.gather,
             }
         };
         let fog = match &s.medium {

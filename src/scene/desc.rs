@@ -57,6 +57,18 @@ pub struct PhotonsDesc {
     pub max_radius: Option<Spanned<f64>>,
     /// Cone-filter constant.
     pub cone_k: Option<Spanned<f64>>,
+    /// `"precomputed"` or `"direct"`.
+    pub gather: Option<GatherName>,
+}
+
+/// Photon gather modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GatherName {
+    /// `"precomputed"`.
+    Precomputed,
+    /// `"direct"`.
+    Direct,
 }
 
 /// `[medium]`.

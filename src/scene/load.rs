@@ -907,6 +907,11 @@ impl Ctx<'_> {
             k,
             max_radius,
             cone_k,
+            gather: match p.gather {
+                None => d.gather,
+                Some(super::desc::GatherName::Precomputed) => super::GatherMode::Precomputed,
+                Some(super::desc::GatherName::Direct) => super::GatherMode::Direct,
+            },
         })
     }
 

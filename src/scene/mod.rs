@@ -86,6 +86,20 @@ pub struct PhotonSettings {
     pub max_radius: Option<f32>,
     /// Jensen's cone-filter constant `k_c` (≥ 1): weight `1 − d/(k_c r)`.
     pub cone_k: f32,
+    /// How shading points evaluate the estimate.
+    pub gather: GatherMode,
+}
+
+/// How the caustic estimate is evaluated at shading points (`[photons] gather`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GatherMode {
+    /// A k-nearest cone-filter gather at every shading point.
+    Direct,
+    /// The estimate precomputed once at every 8th stored photon; shading
+    /// points interpolate their nearest sites (normal check, direct gather as
+    /// fallback: Christensen 1999, "Faster Photon Map Global Illumination").
+    #[default]
+    Precomputed,
 }
 
 impl Default for PhotonSettings {
@@ -95,6 +109,7 @@ impl Default for PhotonSettings {
             k: 64,
             max_radius: None,
             cone_k: 1.1,
+            gather: GatherMode::Precomputed,
         }
     }
 }

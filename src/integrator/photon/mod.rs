@@ -35,17 +35,7 @@ const CHUNK: u64 = 4096;
 /// bounds the transient memory of the per-chunk vectors.
 const BATCH: u64 = 1 << 20;
 
-/// How the caustic estimate is evaluated at shading points.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum GatherMode {
-    /// A k-nearest cone-filter gather at every shading point.
-    Direct,
-    /// The estimate precomputed at every [`PRECOMPUTE_STRIDE`]-th photon;
-    /// shading points take their nearest site's (normal check, direct
-    /// gather as fallback: Christensen 1999, see [`precomputed`]).
-    #[default]
-    Precomputed,
-}
+pub use crate::scene::GatherMode;
 
 impl fmt::Display for GatherMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
