@@ -427,10 +427,10 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "scene-spp-absurd",
-            what: "scene 4096×4096 at `spp = 4294967295`",
-            expect: Some(&["scene.toml:4:7:", "4096×4096 pixels × 4294967295 spp", "more than the limit of 2^40"]),
+            what: "scene 4096×4096 at `spp = 1000000`",
+            expect: Some(&["scene.toml:4:7:", "4096×4096 pixels × 1000000 spp", "more than the limit of 2^40"]),
             setup: |d| {
-                scene_text(d, &BASE.replace("width = 8\nheight = 8\nspp = 1", "width = 4096\nheight = 4096\nspp = 4294967295"))
+                scene_text(d, &BASE.replace("width = 8\nheight = 8\nspp = 1", "width = 4096\nheight = 4096\nspp = 1000000"))
             },
         },
         Case {
@@ -447,9 +447,9 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "cli-spp-override-absurd",
-            what: "`--width 512 --height 512 --spp 4294967295`",
-            expect: Some(&["with the command-line overrides: 512×512 pixels × 4294967295 spp"]),
-            setup: |d| scene_text(d, BASE).args(&["--width", "512", "--height", "512", "--spp", "4294967295"]),
+            what: "`--width 2048 --height 2048 --spp 1000000`",
+            expect: Some(&["with the command-line overrides: 2048×2048 pixels × 1000000 spp"]),
+            setup: |d| scene_text(d, BASE).args(&["--width", "2048", "--height", "2048", "--spp", "1000000"]),
         },
         Case {
             name: "cli-width-zero",
