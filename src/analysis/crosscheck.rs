@@ -750,7 +750,11 @@ fn invalid_hit(scene: &Scene, ray: &Ray, t_max: f32, hit: &Hit) -> Option<String
         Shape::Sphere(s) => ((along - s.center).length() - s.radius).abs(),
         _ => (g.p - along).length(),
     };
-    let tol = t_tolerance(ray, hit.t, &g) * ray.dir.length();
+    // Plus the rounding bound of the reconstructed point itself, which scales
+    // with the primitive's own coordinates (a quad corner 7 units away), not
+    // with the ray's: `Scene::surface_interaction`'s `p_error`.
+    let p_error = scene.surface_interaction(ray, hit).p_error.length();
+    let tol = t_tolerance(ray, hit.t, &g) * ray.dir.length() + 2.0 * p_error;
     let consistent = off <= tol; // false for NaN too
     if !consistent {
         return Some(format!(
