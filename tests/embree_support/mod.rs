@@ -8,67 +8,7 @@ use caustic::math::{Ray, Transform, Vec3, Vec3A};
 use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
 use std::sync::Arc;
 
-/// Icosahedron subdivided `levels` times, vertices on the unit sphere.
-pub fn icosphere(levels: u32) -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut cache = std::collections::HashMap::new();
-        let mut mid = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
-            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
-                (p.len() - 1) as u32
-            })
-        };
-        let mut next = Vec::with_capacity(f.len() * 4);
-        for [a, b, c] in f {
-            let ab = mid(a, b, &mut p);
-            let bc = mid(b, c, &mut p);
-            let ca = mid(c, a, &mut p);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = next;
-    }
-    Mesh::new(format!("icosphere{levels}"), p, f, None).unwrap()
-}
+pub use caustic::scene::generate::icosphere;
 
 /// `n` random triangles in the box [-1, 1]³ (overlapping, of all shapes).
 pub fn soup(n: usize, seed: u64) -> Mesh {
