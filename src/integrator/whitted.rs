@@ -373,28 +373,12 @@ impl<'a> Whitted<'a> {
         if !self.can_bounce(depth) {
             return highlight;
         }
-        // Entering or leaving from the GEOMETRIC normal (outward for closed
-        // shapes): an interpolated normal can face the wrong way near
-        // silhouettes. Leaving: flip the normals and the IOR ratio.
-        let entering = ray.dir.dot(si.ng) < 0.0;
-        let (ng, ns, n1, n2) = if entering {
-            (si.ng, si.ns, 1.0, d.ior)
-        } else {
-            (-si.ng, -si.ns, d.ior, 1.0)
-        };
-        let eta = n1 / n2;
-        // Refract about the shading normal unless that sends the ray back to
-        // the incident side of the geometric surface.
-        let mut n = ns;
-        let mut refracted = refract(ray.dir, ns, eta);
-        if matches!(refracted, Some((t, _, _)) if t.dot(ng) >= 0.0) {
-            n = ng;
-            refracted = refract(ray.dir, ng, eta);
-        }
-        let mut reflected_dir = reflect(ray.dir, n);
-        if reflected_dir.dot(ng) <= 0.0 {
-            reflected_dir = reflect(ray.dir, ng);
-        }
+        let DielectricInterface {
+            n1,
+            n2,
+            reflected: reflected_dir,
+            refracted,
+        } = DielectricInterface::at(ray.dir, si, d.ior);
         let Some((refracted_dir, cos_i, cos_t)) = refracted else {
             // Total internal reflection: all the light is reflected.
             return highlight + self.trace_secondary(si, reflected_dir, depth, ctx);
@@ -412,6 +396,55 @@ impl<'a> Whitted<'a> {
             let lr = self.trace_secondary(si, reflected_dir, depth, ctx);
             let lt = self.trace_secondary(si, refracted_dir, depth, ctx);
             highlight + lr * r + d.tint * lt * (1.0 - r)
+        }
+    }
+}
+
+/// The directions leaving a smooth dielectric interface, shared by camera
+/// paths and photons so that both see the same glass.
+#[derive(Clone, Copy, Debug)]
+pub struct DielectricInterface {
+    /// IOR on the incident side.
+    pub n1: f32,
+    /// IOR on the transmitted side.
+    pub n2: f32,
+    /// Mirror direction.
+    pub reflected: Vec3A,
+    /// Refracted direction with `cos θi`, `cos θt`; `None` under total internal reflection.
+    pub refracted: Option<(Vec3A, f32, f32)>,
+}
+
+impl DielectricInterface {
+    /// The interface hit by direction `dir` at `si` (inside IOR `ior`, outside 1).
+    ///
+    /// Entering or leaving is decided by the GEOMETRIC normal (outward for
+    /// closed shapes): an interpolated normal can face the wrong way near
+    /// silhouettes. Leaving flips the normals and the IOR ratio. Both
+    /// directions use the shading normal unless that would send them to the
+    /// wrong side of the geometric surface.
+    pub fn at(dir: Vec3A, si: &SurfaceInteraction, ior: f32) -> Self {
+        let entering = dir.dot(si.ng) < 0.0;
+        let (ng, ns, n1, n2) = if entering {
+            (si.ng, si.ns, 1.0, ior)
+        } else {
+            (-si.ng, -si.ns, ior, 1.0)
+        };
+        let eta = n1 / n2;
+        let mut n = ns;
+        let mut refracted = refract(dir, ns, eta);
+        if matches!(refracted, Some((t, _, _)) if t.dot(ng) >= 0.0) {
+            n = ng;
+            refracted = refract(dir, ng, eta);
+        }
+        let mut reflected = reflect(dir, n);
+        if reflected.dot(ng) <= 0.0 {
+            reflected = reflect(dir, ng);
+        }
+        Self {
+            n1,
+            n2,
+            reflected,
+            refracted,
         }
     }
 }

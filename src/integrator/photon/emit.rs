@@ -48,7 +48,7 @@
 use super::map::Photon;
 use crate::accel::Accel;
 use crate::integrator::fog;
-use crate::integrator::whitted::{fresnel_schlick, reflect, refract};
+use crate::integrator::whitted::{fresnel_schlick, reflect, DielectricInterface};
 use crate::math::rng::{Domain, Rng};
 use crate::math::sampling::{cosine_hemisphere, uniform_cone, uniform_sphere};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
@@ -236,24 +236,12 @@ impl<'a> PhotonTracer<'a> {
                 if bounces >= self.max_depth {
                     return;
                 }
-                // Entering / leaving by the geometric normal, as in whitted.rs.
-                let entering = ray.dir.dot(si.ng) < 0.0;
-                let (ng, ns, n1, n2) = if entering {
-                    (si.ng, si.ns, 1.0, d.ior)
-                } else {
-                    (-si.ng, -si.ns, d.ior, 1.0)
-                };
-                let eta = n1 / n2;
-                let mut n = ns;
-                let mut refracted = refract(ray.dir, ns, eta);
-                if matches!(refracted, Some((t, _, _)) if t.dot(ng) >= 0.0) {
-                    n = ng;
-                    refracted = refract(ray.dir, ng, eta);
-                }
-                let mut reflected = reflect(ray.dir, n);
-                if reflected.dot(ng) <= 0.0 {
-                    reflected = reflect(ray.dir, ng);
-                }
+                let DielectricInterface {
+                    n1,
+                    n2,
+                    reflected,
+                    refracted,
+                } = DielectricInterface::at(ray.dir, &si, d.ior);
                 match refracted {
                     None => reflected,
                     Some((t, cos_i, cos_t)) => {
