@@ -652,23 +652,24 @@ fn bin_refs(refs: &[Ref], cell: &Aabb, bins: usize) -> BinCounts {
     counts
 }
 
+/// Object bounds as build primitives: clipping is the box intersection.
+pub(crate) struct BoxPrims(pub(crate) Vec<Aabb>);
+
+impl Primitives for BoxPrims {
+    fn count(&self) -> usize {
+        self.0.len()
+    }
+    fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
+        self.0[i as usize].intersection(*cell)
+    }
+    fn bounds(&self, i: u32) -> Aabb {
+        self.0[i as usize]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Boxes as primitives (clipping = intersection).
-    struct Boxes(Vec<Aabb>);
-    impl Primitives for Boxes {
-        fn count(&self) -> usize {
-            self.0.len()
-        }
-        fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
-            self.0[i as usize].intersection(*cell)
-        }
-        fn bounds(&self, i: u32) -> Aabb {
-            self.0[i as usize]
-        }
-    }
 
     fn unit_box(x: f32) -> Aabb {
         Aabb::new(Vec3A::new(x, 0.0, 0.0), Vec3A::new(x + 1.0, 1.0, 1.0))
@@ -792,7 +793,7 @@ mod tests {
                 Aabb::new(c - e, c + e)
             })
             .collect();
-        let prims = Boxes(boxes.clone());
+        let prims = BoxPrims(boxes.clone());
         let tree = build_tree(&prims, &SahParams::default());
         assert!(tree.nodes.len() > 100);
         for (i, b) in boxes.iter().enumerate() {
@@ -833,7 +834,7 @@ mod tests {
                 Aabb::new(c, c + Vec3A::splat(0.5))
             })
             .collect();
-        let prims = Boxes(boxes);
+        let prims = BoxPrims(boxes);
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         let a = one.install(|| build_tree(&prims, &SahParams::default()));

@@ -22,7 +22,7 @@ pub mod bench;
 pub mod build;
 mod node;
 
-use self::build::{build_tree, clip_triangle, Primitives, SahParams};
+use self::build::{build_tree, clip_triangle, BoxPrims, Primitives, SahParams};
 use self::node::{widen, KdTree, LeafResult, TreeShape};
 use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
@@ -103,21 +103,6 @@ impl Primitives for TrianglePrims<'_> {
     }
     fn bounds(&self, i: u32) -> Aabb {
         Aabb::from_points(self.0.corners(i as usize))
-    }
-}
-
-/// Object bounds as build primitives: clipping is the box intersection.
-struct BoxPrims(Vec<Aabb>);
-
-impl Primitives for BoxPrims {
-    fn count(&self) -> usize {
-        self.0.len()
-    }
-    fn clipped_bounds(&self, i: u32, cell: &Aabb) -> Aabb {
-        self.0[i as usize].intersection(*cell)
-    }
-    fn bounds(&self, i: u32) -> Aabb {
-        self.0[i as usize]
     }
 }
 
