@@ -474,6 +474,15 @@ impl Ctx<'_> {
         self.check_finite(*s.get_ref(), s.span(), key)
     }
 
+    /// The two finite numbers of a `size = [w, h]` value.
+    fn finite_size(&self, size: &Spanned<Vec2Desc>) -> Result<(f32, f32), SceneError> {
+        let Vec2Desc([w, h]) = *size.get_ref();
+        Ok((
+            self.check_finite(w, size.span(), "size")?,
+            self.check_finite(h, size.span(), "size")?,
+        ))
+    }
+
     fn check_finite(&self, x: f64, span: Range<usize>, key: &str) -> Result<f32, SceneError> {
         if x.is_nan() {
             return Err(self.invalid(span, format!("`{key}` is NaN: numbers must be finite")));
@@ -950,11 +959,7 @@ impl Ctx<'_> {
         self.only_keys(what, &Self::object_keys(o), &["center", "size", "resolution", "waves"])?;
         let center = self.vec3(self.required(&o.center, "center", what, o.kind.span())?, "center")?;
         let size_desc = self.required(&o.size, "size", what, o.kind.span())?;
-        let Vec2Desc([w, h]) = *size_desc.get_ref();
-        let (w, h) = (
-            self.check_finite(w, size_desc.span(), "size")?,
-            self.check_finite(h, size_desc.span(), "size")?,
-        );
+        let (w, h) = self.finite_size(size_desc)?;
         if !(w > 0.0 && h > 0.0) {
             return Err(self.invalid(size_desc.span(), format!("water `size` = [{w}, {h}] must be positive")));
         }
@@ -1051,11 +1056,7 @@ impl Ctx<'_> {
         self.only_keys(what, &keys, &["center", "size", "normal", "up", "rotate"])?;
         let center = self.vec3(self.required(&o.center, "center", what, o.kind.span())?, "center")?;
         let size_desc = self.required(&o.size, "size", what, o.kind.span())?;
-        let Vec2Desc([w, h]) = *size_desc.get_ref();
-        let (w, h) = (
-            self.check_finite(w, size_desc.span(), "size")?,
-            self.check_finite(h, size_desc.span(), "size")?,
-        );
+        let (w, h) = self.finite_size(size_desc)?;
         if !(w > 0.0 && h > 0.0) {
             return Err(degenerate(
                 size_desc.span(),
