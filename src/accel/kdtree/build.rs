@@ -182,14 +182,8 @@ pub(crate) fn sweep_axis(
     events: &[u64],
     n: usize,
 ) -> Option<SplitChoice> {
-    let sa = cell.surface_area();
-    if sa.is_nan() || sa <= 0.0 {
-        return None;
-    }
-    let inv_sa = 1.0 / sa;
-    let ext = cell.extent();
-    let (a, b) = (ext[(axis + 1) % 3], ext[(axis + 2) % 3]);
-    let (lo, hi) = (cell.min[axis], cell.max[axis]);
+    let geometry = SplitGeometry::new(cell, axis)?;
+    let (lo, hi) = (geometry.lo, geometry.hi);
     let (mut n_left, mut n_right) = (0usize, n);
     let mut best: Option<SplitChoice> = None;
     let mut i = 0;
@@ -212,9 +206,7 @@ pub(crate) fn sweep_axis(
         n_right -= planar + ending;
         let pos = from_order_key(key);
         if pos > lo && pos < hi {
-            let (dl, dr) = (pos - lo, hi - pos);
-            let p_left = 2.0 * (a * b + (a + b) * dl) * inv_sa;
-            let p_right = 2.0 * (a * b + (a + b) * dr) * inv_sa;
+            let (p_left, p_right) = geometry.probabilities(pos);
             let cost_l = params.split_cost(p_left, p_right, n_left + n_planar, n_right);
             let cost_r = params.split_cost(p_left, p_right, n_left, n_right + n_planar);
             let (cost, planar_left) = if cost_l <= cost_r {
@@ -234,6 +226,47 @@ pub(crate) fn sweep_axis(
         n_left += starting + n_planar;
     }
     best
+}
+
+/// The parts of a cell that SAH split costs need along one axis.
+#[derive(Clone, Copy)]
+struct SplitGeometry {
+    lo: f32,
+    hi: f32,
+    /// Edge lengths across the axis.
+    a: f32,
+    b: f32,
+    inv_sa: f32,
+}
+
+impl SplitGeometry {
+    /// `None` for a flat or NaN cell (no split can be costed).
+    fn new(cell: &Aabb, axis: usize) -> Option<Self> {
+        let sa = cell.surface_area();
+        if sa.is_nan() || sa <= 0.0 {
+            return None;
+        }
+        let ext = cell.extent();
+        Some(Self {
+            lo: cell.min[axis],
+            hi: cell.max[axis],
+            a: ext[(axis + 1) % 3],
+            b: ext[(axis + 2) % 3],
+            inv_sa: 1.0 / sa,
+        })
+    }
+
+    /// Probabilities of hitting the left and right children of a split at
+    /// `pos`: their surface areas over the cell's (the SAH's area ratios).
+    #[inline]
+    fn probabilities(&self, pos: f32) -> (f32, f32) {
+        let (a, b) = (self.a, self.b);
+        let (dl, dr) = (pos - self.lo, self.hi - pos);
+        (
+            2.0 * (a * b + (a + b) * dl) * self.inv_sa,
+            2.0 * (a * b + (a + b) * dr) * self.inv_sa,
+        )
+    }
 }
 
 /// Triangle clipped to a box (Sutherland & Hodgman 1974, one plane at a time),
@@ -489,27 +522,14 @@ impl<P: Primitives> Builder<'_, P> {
         axis: usize,
         n: usize,
     ) -> Option<SplitChoice> {
-        let sa = cell.surface_area();
-        if sa.is_nan() || sa <= 0.0 {
-            return None;
-        }
-        let inv_sa = 1.0 / sa;
-        let ext = cell.extent();
-        let (a, b) = (ext[(axis + 1) % 3], ext[(axis + 2) % 3]);
-        let (lo, hi) = (cell.min[axis], cell.max[axis]);
-        let probabilities = |pos: f32| {
-            let (dl, dr) = (pos - lo, hi - pos);
-            (
-                2.0 * (a * b + (a + b) * dl) * inv_sa,
-                2.0 * (a * b + (a + b) * dr) * inv_sa,
-            )
-        };
+        let geometry = SplitGeometry::new(cell, axis)?;
+        let (lo, hi) = (geometry.lo, geometry.hi);
         let mut best: Option<SplitChoice> = None;
         let mut consider = |pos: f32, n_left: usize, n_right: usize, planar_left: bool| {
             if !(pos > lo && pos < hi) {
                 return;
             }
-            let (pl, pr) = probabilities(pos);
+            let (pl, pr) = geometry.probabilities(pos);
             let cost = self.params.split_cost(pl, pr, n_left, n_right);
             if best.is_none_or(|b| cost < b.cost) {
                 best = Some(SplitChoice {
