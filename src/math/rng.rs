@@ -61,6 +61,12 @@ impl Rng {
         self.0.next_u32()
     }
 
+    /// Uniform u64.
+    #[inline]
+    pub fn u64(&mut self) -> u64 {
+        ((self.0.next_u32() as u64) << 32) | self.0.next_u32() as u64
+    }
+
     /// Uniform integer in [0, n) (n > 0), Lemire's multiply-shift.
     #[inline]
     pub fn below(&mut self, n: u32) -> u32 {

@@ -50,7 +50,7 @@ use crate::accel::Accel;
 use crate::integrator::fog;
 use crate::integrator::whitted::{fresnel_schlick, reflect, DielectricInterface};
 use crate::math::rng::{Domain, Rng};
-use crate::math::sampling::{cosine_hemisphere, uniform_cone, uniform_sphere};
+use crate::math::sampling::{cosine_hemisphere, morton_stratified, uniform_cone, uniform_sphere};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
 use crate::scene::{Light, Scene, Shape};
 use std::f32::consts::PI;
@@ -189,18 +189,16 @@ impl<'a> PhotonTracer<'a> {
         let scale = 1.0 / (self.count as f32 * e.probability);
         let (origin, dir, power) = match &e.light {
             Light::Point { position, intensity } => {
-                let u = Vec2::from(rng.f32x2());
-                let v = Vec2::from(rng.f32x2());
-                match sample_cones(*position, &e.casters, u.x, v) {
+                let (pick, u) = self.direction_sample(index, &mut rng);
+                match sample_cones(*position, &e.casters, pick, u) {
                     Some((dir, solid_angle)) => (*position, dir, *intensity * (solid_angle * scale)),
                     None => (*position, uniform_sphere(u), *intensity * (4.0 * PI * scale)),
                 }
             }
             Light::Area(a) => {
                 let x = a.point(Vec2::from(rng.f32x2()));
-                let u = Vec2::from(rng.f32x2());
-                let v = Vec2::from(rng.f32x2());
-                match sample_cones(x, &e.casters, u.x, v) {
+                let (pick, u) = self.direction_sample(index, &mut rng);
+                match sample_cones(x, &e.casters, pick, u) {
                     Some((dir, solid_angle)) => {
                         let cos = dir.dot(a.normal);
                         if cos <= 0.0 {
@@ -217,6 +215,18 @@ impl<'a> PhotonTracer<'a> {
         };
         self.follow(Ray::new(origin, dir), power, &mut rng, &mut out);
         out
+    }
+
+    /// The cone choice and the 2-D direction sample of photon `index`:
+    /// a Morton-ordered stratified sample over all the photons
+    /// ([`morton_stratified`]), so that the photons of one rayon chunk leave
+    /// in neighbouring directions and hit neighbouring geometry (coherent
+    /// traversal and cache use, and a stored map already in spatial order),
+    /// while the photons together stratify the directions.
+    fn direction_sample(&self, index: u64, rng: &mut Rng) -> (f32, Vec2) {
+        let xi = rng.u64();
+        let m = morton_stratified(index, self.count.max(index + 1), xi, [rng.f32(), rng.f32(), rng.f32()]);
+        (m[0], Vec2::new(m[1], m[2]))
     }
 
     fn follow(&self, mut ray: Ray, mut power: Vec3A, rng: &mut Rng, out: &mut TraceResult) {
