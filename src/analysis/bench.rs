@@ -688,12 +688,13 @@ impl fmt::Display for BenchReport {
             writeln!(f)?;
             writeln!(
                 f,
-                "{}: {} objects, {} triangles ({} instanced), {} lights",
+                "{}: {} objects, {} triangles ({} instanced), {} light{}",
                 s.scene,
                 s.objects,
                 grouped(s.triangles),
                 grouped(s.instanced_triangles),
-                s.lights
+                s.lights,
+                if s.lights == 1 { "" } else { "s" }
             )?;
             let sets: Vec<String> = s
                 .ray_sets

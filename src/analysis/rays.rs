@@ -185,7 +185,7 @@ pub fn image_for(count: usize, aspect: f32) -> (u32, u32) {
     } else {
         1.0
     };
-    let width = ((count as f64 * aspect as f64).sqrt().ceil() as u64).clamp(1, u32::MAX as u64);
+    let width = ((count as f64 * aspect as f64).sqrt().round() as u64).clamp(1, u32::MAX as u64);
     let height = (count as u64).div_ceil(width).max(1);
     (width as u32, height.min(u32::MAX as u64) as u32)
 }
