@@ -29,6 +29,9 @@ enum Command {
     /// Cast seeded rays through two accelerators (default Embree and the
     /// KD-tree) and compare every hit; exit 1 on any disagreement that is not a tie.
     Crosscheck(CrosscheckArgs),
+    /// Measure each accelerator on each scene: build time and memory, Mrays/s
+    /// of camera, shadow and incoherent rays, a full render; table and JSON.
+    Bench(BenchArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -78,6 +81,16 @@ struct AccelArgs {
     embree_robust: bool,
 }
 
+impl QualityArg {
+    fn name(self) -> &'static str {
+        match self {
+            QualityArg::Low => "low",
+            QualityArg::Medium => "medium",
+            QualityArg::High => "high",
+        }
+    }
+}
+
 impl AccelArgs {
     fn kind(&self) -> AccelKind {
         self.accel.map(AccelKind::from).unwrap_or_else(AccelKind::default_kind)
@@ -86,12 +99,7 @@ impl AccelArgs {
     fn options(&self, scene: &Scene) -> AccelOptions {
         AccelOptions {
             triangle_test: scene.settings.triangle_test,
-            embree_quality: match self.embree_quality {
-                QualityArg::Low => "low",
-                QualityArg::Medium => "medium",
-                QualityArg::High => "high",
-            }
-            .into(),
+            embree_quality: self.embree_quality.name().into(),
             embree_robust: self.embree_robust,
         }
     }
@@ -185,6 +193,51 @@ struct CrosscheckArgs {
     accel: AccelArgs,
 }
 
+#[derive(Args)]
+struct BenchArgs {
+    /// Scene files (TOML). Default: scenes/dragon.toml.
+    scenes: Vec<PathBuf>,
+    /// Also write the report as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Accelerators, comma-separated (default: every compiled-in one but brute).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    accel: Vec<AccelArg>,
+    /// Camera rays and incoherent rays per scene (shadow rays: one per light per camera hit).
+    #[arg(long, default_value_t = caustic::analysis::bench::DEFAULT_RAYS)]
+    rays: usize,
+    /// Seed of the ray sets and of the render.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Timed runs per ray set (the best is reported).
+    #[arg(long, default_value_t = caustic::analysis::bench::DEFAULT_REPEATS)]
+    repeats: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Width of the full render (and aspect of the camera rays).
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    /// Height of the full render.
+    #[arg(long, default_value_t = 360)]
+    height: u32,
+    /// Samples per pixel of the full render.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Photons of the full render (default: the scene's, at most 100,000).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Embree BVH build quality.
+    #[arg(long, value_enum, default_value = "high")]
+    embree_quality: QualityArg,
+    /// Embree robust traversal mode.
+    #[arg(long)]
+    embree_robust: bool,
+    /// No progress lines on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
 #[cfg(feature = "embree")]
 const DEFAULT_A: &str = "embree";
 #[cfg(not(feature = "embree"))]
@@ -224,6 +277,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Info(args) => run_info(args),
         Command::Crosscheck(args) => run_crosscheck(args),
+        Command::Bench(args) => run_bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -459,4 +513,57 @@ fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
     } else {
         Err(anyhow::anyhow!("{} disagreement(s) that are not ties", report.disagreement_count()).into())
     }
+}
+
+fn run_bench(args: BenchArgs) -> Result<(), Failure> {
+    use caustic::analysis::bench::{self, BenchOptions, RenderOverrides};
+    let scenes = if args.scenes.is_empty() {
+        vec![bench::default_scene()]
+    } else {
+        args.scenes
+    };
+    if let Some(path) = &args.json {
+        film::check_writable(path).map_err(bad_input)?;
+    }
+    let options = BenchOptions {
+        accels: if args.accel.is_empty() {
+            bench::default_accels()
+        } else {
+            args.accel.iter().map(|&a| a.into()).collect()
+        },
+        rays: args.rays,
+        seed: args.seed,
+        repeats: args.repeats,
+        render: RenderOverrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            photons: args.photons,
+        },
+        accel_options: AccelOptions {
+            embree_quality: args.embree_quality.name().into(),
+            embree_robust: args.embree_robust,
+            ..AccelOptions::default()
+        },
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let quiet = args.quiet;
+    let report = pool
+        .install(|| {
+            bench::run(&scenes, &options, &|line| {
+                if !quiet {
+                    eprintln!("bench: {line}");
+                }
+            })
+        })
+        .map_err(|e| if e.is_bad_input() { bad_input(e) } else { e.into() })?;
+    print!("{report}");
+    if let Some(path) = &args.json {
+        report.write_json(path).map_err(bad_input)?;
+        println!("written: {}", path.display());
+    }
+    Ok(())
 }

@@ -4,10 +4,10 @@
 //! `CAUSTIC_ASSETS=/path/to/assets cargo test --release --test kdtree_throughput -- --ignored --nocapture`
 //! (`KDTREE_BENCH_SIZE=WxH` changes the 640×360 image the rays come from).
 
-use caustic::accel::kdtree::bench::{process_cpu_seconds, standard_ray_sets, throughput};
 use caustic::accel::kdtree::build::SahParams;
 use caustic::accel::kdtree::KdTreeAccel;
 use caustic::accel::{build, Accel, AccelKind, AccelOptions};
+use caustic::analysis::rays::{process_cpu_seconds, standard_ray_sets, throughput};
 use caustic::scene::load_scene;
 use std::path::Path;
 use std::time::Instant;
@@ -61,19 +61,19 @@ fn dragon_throughput_kdtree_vs_embree() {
         })
         .collect();
     let reference = accels.last().unwrap();
-    let sets = standard_ray_sets(&scene, reference.as_ref(), w, h, 1);
+    let sets = standard_ray_sets(&scene, reference.as_ref(), (w * h) as usize, w as f32 / h as f32, 1);
     println!("threads: {}", rayon::current_num_threads());
     for set in &sets {
         let mut hits = Vec::new();
         for (kind, accel) in kinds.iter().zip(&accels) {
             // Best of three runs: the machine may be shared.
             let best = (0..3)
-                .map(|_| throughput(accel.as_ref(), &set.rays, set.query))
+                .map(|_| throughput(accel.as_ref(), &set.rays, set.query()))
                 .max_by(|a, b| a.mrays_per_s().total_cmp(&b.mrays_per_s()))
                 .unwrap();
             println!(
                 "{:>10} {:>7}: {:8.2} Mrays/s, {:6.2} Mrays/CPU-s ({} rays, {} hits)",
-                set.name,
+                set.kind.name(),
                 kind.name(),
                 best.mrays_per_s(),
                 best.mrays_per_cpu_s().unwrap_or(f64::NAN),
@@ -87,7 +87,7 @@ fn dragon_throughput_kdtree_vs_embree() {
         assert!(
             hi - lo <= set.rays.len() / 1000 + 5,
             "{}: hit counts {hits:?}",
-            set.name
+            set.kind.name()
         );
     }
     println!(

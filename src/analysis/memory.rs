@@ -5,6 +5,19 @@ pub fn peak_rss_bytes() -> Option<u64> {
     status_kib("VmHWM:").map(|k| k * 1024)
 }
 
+/// Current resident set size of this process in bytes (`VmRSS`).
+pub fn current_rss_bytes() -> Option<u64> {
+    status_kib("VmRSS:").map(|k| k * 1024)
+}
+
+/// Resets the kernel's peak-RSS counter of this process to the current
+/// resident set (writes `5` to `/proc/self/clear_refs`, Linux ≥ 4.0), so that
+/// [`peak_rss_bytes`] measures one phase of a run (the benchmarks measure
+/// each accelerator apart). False when the reset is not possible.
+pub fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
 /// Memory the kernel reports as available to new allocations (`MemAvailable`).
 pub fn available_bytes() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -129,6 +142,8 @@ mod tests {
         if cfg!(target_os = "linux") {
             assert!(peak_rss_bytes().unwrap() > 1 << 20);
             assert!(available_bytes().unwrap() > 0);
+            let rss = current_rss_bytes().unwrap();
+            assert!(rss > 1 << 20);
         }
     }
 }

@@ -18,7 +18,6 @@
 //! triangle), and traversal intervals carry a rounding margin so no leaf that
 //! could hold the closest hit is skipped.
 
-pub mod bench;
 pub mod build;
 mod node;
 

@@ -1,0 +1,53 @@
+//! A small whole-image render per accelerator: the Cornell box at 160×90,
+//! 1 spp, with a 10,000-photon caustic pass (mirror, glass, the star mesh,
+//! an area light), and the generated torus scene at the same size.
+//!
+//! `cargo bench --bench render` (under a minute).
+
+mod common;
+
+use caustic::accel;
+use caustic::accel::AccelOptions;
+use caustic::analysis::bench::default_accels;
+use caustic::integrator::{render::render, RenderPlan};
+use caustic::scene::{load_scene, Scene};
+use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
+use std::hint::black_box;
+use std::path::Path;
+
+fn small(mut scene: Scene) -> Scene {
+    let s = &mut scene.settings;
+    s.width = 160;
+    s.height = 90;
+    s.spp = 1;
+    s.photons.count = 10_000;
+    scene
+}
+
+fn render_group(c: &mut Criterion, label: &str, scene: &Scene) {
+    let plan = RenderPlan::new(scene);
+    let mut group = c.benchmark_group(format!("render/{label}"));
+    group.sampling_mode(SamplingMode::Flat);
+    group.throughput(Throughput::Elements((plan.width * plan.height) as u64));
+    for kind in default_accels() {
+        let accel = accel::build(scene, kind, &AccelOptions::default()).expect("accelerator builds");
+        group.bench_function(kind.name(), |b| {
+            b.iter(|| black_box(render(scene, accel.as_ref(), &plan, &|_, _| {})))
+        });
+    }
+    group.finish();
+}
+
+fn renders(c: &mut Criterion) {
+    let cornell = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml"))
+        .expect("scenes/cornell.toml loads");
+    render_group(c, "cornell-160x90", &small(cornell));
+    render_group(c, "torus-160x90", &small(common::torus_scene()));
+}
+
+criterion_group! {
+    name = render_benches;
+    config = common::quick(4);
+    targets = renders
+}
+criterion_main!(render_benches);
