@@ -29,6 +29,10 @@ enum Command {
     /// Cast seeded rays through two accelerators (default Embree and the
     /// KD-tree) and compare every hit; exit 1 on any disagreement that is not a tie.
     Crosscheck(CrosscheckArgs),
+    /// Render at increasing budgets (spp:photons, spp, or seconds) with each
+    /// accelerator and measure RMSE / relMSE against a reference EXR; write a
+    /// CSV and a log-log plot of error against time.
+    Converge(ConvergeArgs),
     /// Measure each accelerator on each scene: build time and memory, Mrays/s
     /// of camera, shadow and incoherent rays, a full render; table and JSON.
     Bench(BenchArgs),
@@ -193,6 +197,75 @@ struct CrosscheckArgs {
     accel: AccelArgs,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum GatherArg {
+    Direct,
+    Precomputed,
+}
+
+#[derive(Args)]
+struct ConvergeArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Reference image: a linear EXR of the same resolution (e.g. from
+    /// `caustic render SCENE --spp 256 --photons 10000000 --seed 7 --exr ref.exr`).
+    #[arg(long)]
+    reference: PathBuf,
+    /// Budgets, comma-separated: SPP:PHOTONS (1:10000), SPP (photons from
+    /// --photons-per-spp, else the scene's), or SECONDSs (2s: doubling search).
+    #[arg(long, default_value = "1,2,4,8,16")]
+    budgets: String,
+    /// Accelerators, one curve each (default: embree,kdtree, or kdtree without Embree).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    accel: Vec<AccelArg>,
+    /// Photon gather modes to compare (one curve per accelerator and mode;
+    /// default: the scene's mode only).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    gather: Vec<GatherArg>,
+    /// Photons per spp for budgets that give no photon count.
+    #[arg(long)]
+    photons_per_spp: Option<u64>,
+    /// Override the scene's photon count (the default for SPP and time budgets).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// relMSE epsilon: (x - ref)^2 / (ref^2 + epsilon).
+    #[arg(long, default_value_t = caustic::analysis::converge::RELMSE_EPSILON)]
+    epsilon: f64,
+    /// CSV output.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// PNG plot output (log-log error against time).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Plot size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1400x560")]
+    plot_size: String,
+    /// Override the image width (must match the reference).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Override the image height (must match the reference).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Override the seed (use a different one from the reference's).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Ray–triangle test of the in-house backends.
+    #[arg(long, value_enum)]
+    triangle_test: Option<TriangleTestArg>,
+    /// Embree BVH build quality.
+    #[arg(long, value_enum, default_value = "high")]
+    embree_quality: QualityArg,
+    /// Embree robust traversal mode.
+    #[arg(long)]
+    embree_robust: bool,
+    /// No progress lines.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
 #[derive(Args)]
 struct BenchArgs {
     /// Scene files (TOML). Default: scenes/dragon.toml.
@@ -277,6 +350,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Info(args) => run_info(args),
         Command::Crosscheck(args) => run_crosscheck(args),
+        Command::Converge(args) => run_converge(args),
         Command::Bench(args) => run_bench(args),
     };
     match result {
@@ -513,6 +587,96 @@ fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
     } else {
         Err(anyhow::anyhow!("{} disagreement(s) that are not ties", report.disagreement_count()).into())
     }
+}
+
+fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
+    use caustic::analysis::converge::{self, ConvergeOptions, CurveSpec};
+    let mut scene = load(&args.scene)?;
+    let s = &mut scene.settings;
+    s.width = args.width.unwrap_or(s.width);
+    s.height = args.height.unwrap_or(s.height);
+    s.seed = args.seed.unwrap_or(s.seed);
+    if let Some(n) = args.photons {
+        scene::load::check_photon_count(n)
+            .map_err(|e| bad_input(anyhow::anyhow!("{}: --photons: {e}", args.scene.display())))?;
+        s.photons.count = n;
+    }
+    let accel_args = AccelArgs {
+        accel: None,
+        triangle_test: args.triangle_test,
+        embree_quality: args.embree_quality,
+        embree_robust: args.embree_robust,
+    };
+    accel_args.apply(&mut scene);
+    let accels: Vec<AccelKind> = if args.accel.is_empty() {
+        if cfg!(feature = "embree") {
+            vec![AccelKind::Embree, AccelKind::KdTree]
+        } else {
+            vec![AccelKind::KdTree]
+        }
+    } else {
+        args.accel.iter().map(|&a| a.into()).collect()
+    };
+    let gathers: Vec<scene::GatherMode> = args
+        .gather
+        .iter()
+        .map(|g| match g {
+            GatherArg::Direct => scene::GatherMode::Direct,
+            GatherArg::Precomputed => scene::GatherMode::Precomputed,
+        })
+        .collect();
+    let options = ConvergeOptions {
+        budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
+        curves: CurveSpec::cross(&accels, &gathers),
+        photons_per_spp: args.photons_per_spp,
+        epsilon: args.epsilon,
+        accel: accel_args.options(&scene),
+    };
+    let plot_size = args
+        .plot_size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .ok_or_else(|| {
+            bad_input(anyhow::anyhow!(
+                "--plot-size {:?}: expected WIDTHxHEIGHT",
+                args.plot_size
+            ))
+        })?;
+    caustic::analysis::plot::check_size(plot_size.0, plot_size.1)
+        .map_err(|e| bad_input(anyhow::anyhow!("--plot-size: {e}")))?;
+    for out in args.csv.iter().chain(args.plot.iter()) {
+        film::check_writable(out).map_err(bad_input)?;
+    }
+    let reference =
+        converge::read_exr(&args.reference, Some((scene.settings.width, scene.settings.height))).map_err(bad_input)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let quiet = args.quiet;
+    let results = pool
+        .install(|| {
+            converge::run(&scene, &reference, &options, &mut |line| {
+                if !quiet {
+                    eprintln!("{line}");
+                }
+            })
+        })
+        .map_err(|e| match e {
+            converge::ConvergeError::Accel { .. } => Failure::from(e),
+            other => bad_input(other),
+        })?;
+    print!("{}", converge::table_text(&results, options.epsilon));
+    if let Some(p) = &args.csv {
+        converge::write_csv(p, &results).map_err(bad_input)?;
+        println!("written: {}", p.display());
+    }
+    if let Some(p) = &args.plot {
+        let title = args.scene.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+        converge::write_plot(p, &results, &title, options.epsilon, plot_size.0, plot_size.1).map_err(bad_input)?;
+        println!("written: {}", p.display());
+    }
+    Ok(())
 }
 
 fn run_bench(args: BenchArgs) -> Result<(), Failure> {

@@ -1,9 +1,13 @@
 //! Measurements over the renderer's components: [`crosscheck`], which casts
 //! seeded rays through two accelerators and reports where they disagree,
 //! [`memory`], the process's peak memory for reports, [`rays`], seeded ray
-//! sets and their timed queries, and [`bench`], `caustic bench`.
+//! sets and their timed queries, [`bench`], `caustic bench`, and
+//! [`converge`], run time against error over increasing budgets (with its
+//! log-log [`plot`]).
 
 pub mod bench;
+pub mod converge;
 pub mod crosscheck;
 pub mod memory;
+pub mod plot;
 pub mod rays;
