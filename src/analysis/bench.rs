@@ -266,6 +266,16 @@ pub struct AccelBench {
     pub render: RenderBench,
 }
 
+impl AccelBench {
+    /// Peak resident set during the build minus the resident set before it:
+    /// the memory the build needed at its peak, comparable between
+    /// accelerators whatever the process held before (scene, ray sets).
+    pub fn build_rss_increase_bytes(&self) -> Option<u64> {
+        let (before, peak) = (self.rss_before_build_bytes?, self.peak_rss_build_bytes?);
+        self.peak_rss_reset.then(|| peak.saturating_sub(before))
+    }
+}
+
 /// Throughput of one ray set through one accelerator.
 #[derive(Clone, Debug, Serialize)]
 pub struct RayBench {
@@ -724,7 +734,7 @@ impl fmt::Display for BenchReport {
             write!(
                 f,
                 "{:<16}{:>9}{:>11}{:>11}",
-                "accelerator", "build s", "accel MiB", "peak MiB"
+                "accelerator", "build s", "accel MiB", "build +MiB"
             )?;
             for r in &s.ray_sets {
                 write!(f, "{:>13}", format!("{} Mr/s", short(r.kind)))?;
@@ -737,7 +747,7 @@ impl fmt::Display for BenchReport {
                     a.name,
                     a.build_seconds,
                     mib(Some(a.memory_bytes)),
-                    mib(a.peak_rss_build_bytes)
+                    mib(a.build_rss_increase_bytes())
                 )?;
                 for r in &a.rays {
                     write!(f, "{:>13}", opt(r.mrays_per_s, 2))?;
