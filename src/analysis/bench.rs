@@ -733,7 +733,7 @@ impl fmt::Display for BenchReport {
             writeln!(f)?;
             write!(
                 f,
-                "{:<16}{:>9}{:>11}{:>11}",
+                "{:<16}{:>9}{:>11}{:>12}",
                 "accelerator", "build s", "accel MiB", "build +MiB"
             )?;
             for r in &s.ray_sets {
@@ -743,7 +743,7 @@ impl fmt::Display for BenchReport {
             for a in &s.accelerators {
                 write!(
                     f,
-                    "{:<16}{:>9.3}{:>11}{:>11}",
+                    "{:<16}{:>9.3}{:>11}{:>12}",
                     a.name,
                     a.build_seconds,
                     mib(Some(a.memory_bytes)),
@@ -764,7 +764,7 @@ impl fmt::Display for BenchReport {
                 let mem = ratio(Some(a.memory_bytes as f64), Some(b.memory_bytes as f64));
                 write!(
                     f,
-                    "{:<16}{:>9}{:>11}{:>11}",
+                    "{:<16}{:>9}{:>11}{:>12}",
                     format!("{}/{}", c.accel, c.baseline),
                     format!("{:.2}×", c.build_time_ratio),
                     mem.map_or("-".into(), |x| format!("{x:.2}×")),
