@@ -87,7 +87,7 @@ pub fn check_writable(path: &Path) -> Result<(), OutputError> {
 /// Creates the temporary file next to `path`, lets `write` fill it, fsyncs it
 /// and renames it over `path` (then fsyncs the directory on Unix so the rename
 /// itself is durable). On error the temporary file is removed.
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
