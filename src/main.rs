@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// caustic: a CPU renderer (Whitted, photon-mapped caustics, Embree 4 and an in-house KD-tree).
 #[derive(Parser)]
@@ -156,6 +156,20 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Save the accumulation (EXR: per-pixel sums and sample counts, seed and a
+    /// fingerprint of the scene and settings) to this file, atomically, every
+    /// --checkpoint-every seconds and when the render stops.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between two checkpoints.
+    #[arg(long, default_value_t = 60.0)]
+    checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint; the result equals an
+    /// uninterrupted render bit for bit. Width, height, spp, seed, photons and
+    /// accelerator default to the checkpoint's; checkpoints go on to the same
+    /// file unless --checkpoint names another.
+    #[arg(long)]
+    resume: Option<PathBuf>,
     #[command(flatten)]
     accel: AccelArgs,
 }
@@ -366,8 +380,31 @@ fn load(path: &Path) -> Result<Scene, Failure> {
     scene::load_scene(path).map_err(bad_input)
 }
 
-fn run_render(args: RenderArgs) -> Result<(), Failure> {
+fn run_render(mut args: RenderArgs) -> Result<(), Failure> {
     let mut scene = load(&args.scene)?;
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
+        return Err(bad_input(anyhow::anyhow!(
+            "--checkpoint-every {}: must be a positive number of seconds",
+            args.checkpoint_every
+        )));
+    }
+    let resumed = match &args.resume {
+        Some(path) => Some(film::read_checkpoint(path).map_err(bad_input)?),
+        None => None,
+    };
+    if let Some(c) = &resumed {
+        // The checkpoint's settings are the defaults; explicit overrides
+        // that differ are refused by the fingerprint check below.
+        let m = &c.meta;
+        args.width.get_or_insert(m.width);
+        args.height.get_or_insert(m.height);
+        args.spp.get_or_insert(m.spp);
+        args.seed.get_or_insert(m.seed);
+        args.photons.get_or_insert(m.photons);
+        if args.accel.accel.is_none() {
+            args.accel.accel = AccelArg::from_str(&m.accel, true).ok();
+        }
+    }
     let s = &mut scene.settings;
     s.width = args.width.unwrap_or(s.width);
     s.height = args.height.unwrap_or(s.height);
@@ -397,19 +434,88 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
                 .unwrap_or_else(|| "render".into())
         ))),
     };
+    let checkpoint = args.checkpoint.clone().or_else(|| args.resume.clone());
+    let kind = args.accel.kind();
+    let meta = checkpoint.as_ref().map(|_| {
+        let st = &scene.settings;
+        let options = match kind {
+            AccelKind::Embree => format!(
+                "quality {:?} robust {}",
+                args.accel.options(&scene).embree_quality,
+                args.accel.embree_robust
+            ),
+            _ => String::new(),
+        };
+        film::CheckpointMeta {
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            seed: st.seed,
+            photons: st.photons.count,
+            accel: kind.name().to_string(),
+            fingerprint: integrator::resume::fingerprint(&scene, kind, &options),
+        }
+    });
+    if let (Some(c), Some(now), Some(path)) = (&resumed, &meta, &args.resume) {
+        if c.meta.fingerprint != now.fingerprint {
+            return Err(bad_input(anyhow::anyhow!(
+                "{}: the checkpoint is of a different render ({}); resume with the scene and settings it was started with",
+                path.display(),
+                checkpoint_differences(&c.meta, now)
+            )));
+        }
+    }
     // Fail before hours of rendering, not after.
-    for out in png.iter().chain(args.exr.iter()) {
+    for out in png.iter().chain(args.exr.iter()).chain(checkpoint.iter()) {
         film::check_writable(out).map_err(bad_input)?;
     }
+    let interrupt = integrator::resume::Interrupt::install().context("cannot install the Ctrl-C handler")?;
+    let start = match resumed {
+        Some(c) => c.accumulation,
+        None => film::Accumulation::new(scene.settings.width, scene.settings.height),
+    };
+    let long_run = LongRun {
+        checkpoint: checkpoint.as_deref().zip(meta.as_ref()),
+        start,
+        interrupt: &interrupt,
+    };
 
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .context("cannot start the worker threads")?;
-    pool.install(|| render_with(&scene, &args, png.as_deref()))
+    pool.install(|| render_with(&scene, &args, png.as_deref(), long_run))
 }
 
-fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>) -> Result<(), Failure> {
+/// What differs between a checkpoint's recorded settings and this run's.
+fn checkpoint_differences(then: &film::CheckpointMeta, now: &film::CheckpointMeta) -> String {
+    let mut diffs = Vec::new();
+    let mut field = |name: &str, a: String, b: String| {
+        if a != b {
+            diffs.push(format!("{name} {a} in the checkpoint, {b} now"));
+        }
+    };
+    field("width", then.width.to_string(), now.width.to_string());
+    field("height", then.height.to_string(), now.height.to_string());
+    field("spp", then.spp.to_string(), now.spp.to_string());
+    field("seed", then.seed.to_string(), now.seed.to_string());
+    field("photons", then.photons.to_string(), now.photons.to_string());
+    field("accelerator", then.accel.clone(), now.accel.clone());
+    if diffs.is_empty() {
+        "the scene file, a mesh or another setting changed".to_string()
+    } else {
+        diffs.join(", ")
+    }
+}
+
+/// Checkpointing, resume state and the stop flag of one `render` run.
+struct LongRun<'a> {
+    checkpoint: Option<(&'a Path, &'a film::CheckpointMeta)>,
+    start: film::Accumulation,
+    interrupt: &'a integrator::resume::Interrupt,
+}
+
+fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>, run: LongRun) -> Result<(), Failure> {
     let kind = args.accel.kind();
     let accel = accel::build(scene, kind, &args.accel.options(scene))?;
     let stats = accel.stats();
@@ -428,18 +534,58 @@ fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>) -> Result<(
         eprintln!("{plan}");
     }
 
+    let total_samples = st.width as u64 * st.height as u64 * st.spp as u64;
+    let resumed_samples = run.start.samples_taken();
+    if let Some(path) = &args.resume {
+        let (lo, hi) = run.start.taken_range();
+        eprintln!(
+            "resuming {}: {resumed_samples} of {total_samples} samples done ({lo}–{hi} of {} spp per pixel)",
+            path.display(),
+            st.spp
+        );
+    }
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
-        ProgressBar::new((st.width * st.height) as u64)
+        ProgressBar::new(total_samples)
     };
     bar.set_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
             .expect("static template"),
     );
+    bar.set_position(resumed_samples);
+    bar.reset_eta();
+    let save = |acc: &film::Accumulation| {
+        if let Some((path, meta)) = run.checkpoint {
+            if let Err(e) = film::write_checkpoint(path, acc, meta) {
+                bar.suspend(|| eprintln!("warning: checkpoint not saved (the render goes on): {e}"));
+            }
+        }
+    };
+    let progress = |done, _total| bar.set_position(done);
+    let control = integrator::RenderControl {
+        cancel: Some(run.interrupt.flag()),
+        sample_limit: None,
+        checkpoint: run.checkpoint.map(|_| integrator::CheckpointHook {
+            every: Duration::from_secs_f64(args.checkpoint_every),
+            save: &save,
+        }),
+        progress: &progress,
+    };
     let start = Instant::now();
-    let mut out = integrator::render::render(scene, accel.as_ref(), &plan, &|done, _total| bar.set_position(done));
+    let mut out = integrator::render_with_control(scene, accel.as_ref(), &plan, run.start, &control);
     bar.finish_and_clear();
+    let samples_done = out.accumulation.samples_taken();
+    if samples_done == 0 {
+        // Stopped before the first sample: keep whatever files are there.
+        return Err(Failure {
+            code: run.interrupt.exit_code(),
+            error: anyhow::anyhow!(
+                "interrupted by {} before the first sample: nothing written",
+                run.interrupt.signal_name().unwrap_or("a signal")
+            ),
+        });
+    }
     let wall = start.elapsed();
     match args.debug {
         Some(DebugView::Photons) => match out.photon_map.clone() {
@@ -459,10 +605,14 @@ fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>) -> Result<(
     if let Some(p) = &args.exr {
         film::write_exr(p, &out.film).map_err(bad_input)?;
     }
+    if let Some((path, meta)) = run.checkpoint {
+        film::write_checkpoint(path, &out.accumulation, meta)?;
+    }
     let written: Vec<String> = png
         .iter()
         .map(|p| p.display().to_string())
         .chain(args.exr.iter().map(|p| p.display().to_string()))
+        .chain(run.checkpoint.map(|(p, _)| format!("{} (checkpoint)", p.display())))
         .collect();
     println!("{}", out.stats.to_string().trim_end());
     println!(
@@ -486,6 +636,26 @@ fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>) -> Result<(
         }
     );
     println!("written: {}", written.join(", "));
+    if !out.complete {
+        let (lo, hi) = out.accumulation.taken_range();
+        let how_to_resume = match run.checkpoint {
+            Some((path, _)) => format!(
+                "; continue with: caustic render {} --resume {}",
+                args.scene.display(),
+                path.display()
+            ),
+            None => " (no --checkpoint: it cannot be resumed)".to_string(),
+        };
+        return Err(Failure {
+            code: run.interrupt.exit_code(),
+            error: anyhow::anyhow!(
+                "interrupted by {}: {samples_done} of {total_samples} samples done ({lo}–{hi} of {} spp per pixel), \
+                 partial image written{how_to_resume}",
+                run.interrupt.signal_name().unwrap_or("a signal"),
+                st.spp
+            ),
+        });
+    }
     Ok(())
 }
 

@@ -1,11 +1,16 @@
 //! The film: a linear HDR image the integrator fills, the tone mapping that
-//! turns it into display values, and the (atomic) PNG / EXR writers.
+//! turns it into display values, the (atomic) PNG / EXR writers, and the
+//! accumulation buffer with its checkpoint files (interrupt and resume).
 
+pub mod accum;
+pub mod checkpoint;
 pub mod output;
 pub mod tonemap;
 
 use crate::math::Vec3;
 
+pub use accum::Accumulation;
+pub use checkpoint::{read_checkpoint, write_checkpoint, Checkpoint, CheckpointError, CheckpointMeta};
 pub use output::{check_writable, write_exr, write_png, OutputError};
 pub use tonemap::{aces_fitted, srgb_oetf, tonemap_to_srgb8};
 

@@ -1,14 +1,18 @@
 //! Integrators: the render plan, the photon pass (caustics), fog, the
-//! Whitted integrator, the tiled deterministic render loop and the debug
-//! overlays.
+//! Whitted integrator, the progressive deterministic render loop, interrupt
+//! and resume support, and the debug overlays.
 
 pub mod debug;
 pub mod fog;
 pub mod photon;
 pub mod plan;
 pub mod render;
+pub mod resume;
 pub mod whitted;
 
 pub use plan::RenderPlan;
-pub use render::{render, render_with_photons, RenderOutput, RenderStats};
+pub use render::{
+    render, render_progressive, render_with_control, render_with_photons, CheckpointHook, RenderControl, RenderOutput,
+    RenderStats,
+};
 pub use whitted::{RayCounts, Whitted};

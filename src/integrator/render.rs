@@ -1,13 +1,23 @@
-//! The render loop: tiles on rayon, one seeded random stream per pixel
-//! sample, box-filtered pixels. Each tile is computed independently and the
-//! tiles are assembled in a fixed order, so the image is bit-identical for
-//! any number of threads.
+//! The render loop: progressive passes over rayon tiles, one seeded random
+//! stream per pixel sample, box-filtered pixels.
+//!
+//! The per-pixel state is explicit ([`Accumulation`]: running f32 sum, samples
+//! taken, samples kept). The image is rendered in passes of sample indices
+//! (every pixel to 1, 2, 4, 8, then 8 more samples per pass), so a render
+//! stopped early covers the whole frame at a lower sample count instead of
+//! leaving black tiles. Every pixel adds its samples in increasing sample
+//! index `k` from its own stream `Rng::for_pixel(seed, pixel, k)`, so the
+//! sum after `n` samples is the same f32 value whether the pixel got there in
+//! one pass, several, or across an interruption and a resume from a saved
+//! sum: the final film is bit-identical to an uninterrupted render, for any
+//! number of threads. A render can be stopped (cancel flag, sample limit) at
+//! any pixel boundary; pixels never hold part of a sample.
 
 use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
-use crate::film::Film;
+use crate::film::{Accumulation, Film};
 use crate::math::rng::Domain;
 use crate::math::sampling::{grid_for, stratified};
 use crate::math::{Rng, Vec2, Vec3, Vec3A};
@@ -15,13 +25,27 @@ use crate::scene::Scene;
 use rayon::prelude::*;
 use std::fmt;
 use std::num::NonZero;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 /// Tile edge in pixels: big enough to amortise scheduling, small enough to
 /// balance 2-64 threads on a 1080p image.
 pub const TILE_SIZE: u32 = 32;
+
+/// Most samples per pixel one pass adds. Passes double the sample count up
+/// to this step (1, 2, 4, 8, 16, 24, ...): early passes give a quick
+/// full-frame preview, later ones keep each tile's work short (a few
+/// milliseconds on the showcase scenes) so a cancel or a due checkpoint is
+/// served quickly, while the per-pass cost (tile scheduling, one lock per
+/// tile) stays negligible.
+pub const MAX_PASS_SAMPLES: u32 = 8;
+
+/// Sample count every pixel reaches at the end of the pass that starts when
+/// the least-sampled pixel has `level` samples (never above `limit`).
+pub fn next_pass_target(level: u32, limit: u32) -> u32 {
+    level.saturating_add(level.clamp(1, MAX_PASS_SAMPLES)).min(limit)
+}
 
 /// What a render did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -78,14 +102,64 @@ impl fmt::Display for RenderStats {
 /// A rendered image and its statistics.
 #[derive(Clone, Debug)]
 pub struct RenderOutput {
-    /// Linear HDR film.
+    /// Linear HDR film (the mean of each pixel's kept samples).
     pub film: Film,
-    /// Statistics.
+    /// The per-pixel state the film was made from: what a checkpoint saves.
+    pub accumulation: Accumulation,
+    /// Every pixel has all its samples (false when cancelled or stopped at
+    /// a sample limit).
+    pub complete: bool,
+    /// Statistics of this run (a resumed render counts only the samples it
+    /// took itself).
     pub stats: RenderStats,
     /// The caustic map used, when the photon pass ran (for the debug overlay).
     pub photon_map: Option<Arc<PhotonMap>>,
 }
 
+/// Periodic saving of the accumulation during a render.
+pub struct CheckpointHook<'a> {
+    /// Least time between two saves.
+    pub every: Duration,
+    /// Called with a consistent snapshot (every pixel holds whole samples)
+    /// from a worker thread between two tiles, while the other workers go
+    /// on; it should report its own errors (a failed save does not stop
+    /// the render).
+    pub save: &'a (dyn Fn(&Accumulation) + Sync),
+}
+
+/// How a render is driven: when it stops early and what it reports.
+pub struct RenderControl<'a> {
+    /// When set (by a signal handler, another thread, a test), workers stop
+    /// before their next pixel; the render returns what it has.
+    pub cancel: Option<&'a AtomicBool>,
+    /// Stop once every pixel has at least this many samples (previews,
+    /// tests); `None`: the plan's spp.
+    pub sample_limit: Option<u32>,
+    /// Periodic checkpoints.
+    pub checkpoint: Option<CheckpointHook<'a>>,
+    /// `progress(samples_done, samples_total)` over the whole image (samples
+    /// of a resumed accumulation included), called after each tile from
+    /// worker threads in completion order.
+    pub progress: &'a (dyn Fn(u64, u64) + Sync),
+}
+
+impl<'a> RenderControl<'a> {
+    /// Render every sample, reporting progress only.
+    pub fn to_completion(progress: &'a (dyn Fn(u64, u64) + Sync)) -> Self {
+        Self {
+            cancel: None,
+            sample_limit: None,
+            checkpoint: None,
+            progress,
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+#[derive(Clone, Copy)]
 struct Tile {
     x0: u32,
     y0: u32,
@@ -93,25 +167,27 @@ struct Tile {
     y1: u32,
 }
 
-struct TileResult {
-    pixels: Vec<Vec3>,
+/// The part of the accumulation one tile owns during a render, row-major
+/// within the tile. Behind a mutex only so a checkpoint can take a
+/// snapshot while the render goes on: the lock is uncontended otherwise.
+struct TileState {
+    tile: Tile,
+    sum: Vec<Vec3>,
+    taken: Vec<u32>,
+    kept: Vec<u32>,
+}
+
+#[derive(Default)]
+struct PassWork {
     rays: RayCounts,
     samples: u64,
     dropped: u64,
 }
 
-/// Renders `scene` as `plan` says, on the current rayon pool: the photon
-/// pass first when the plan runs it, then the image.
-/// `progress(done_pixels, total_pixels)` is called after each tile (from
-/// worker threads, in completion order).
-pub fn render(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> RenderOutput {
-    let start = Instant::now();
-    let photons = match plan.photons {
+/// Runs the photon pass when `plan` asks for it: deterministic for any
+/// thread count, so a resumed render re-runs it rather than storing it.
+pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> Option<(PhotonMap, PhotonStats)> {
+    match plan.photons {
         PhotonPlan::Run {
             count,
             k,
@@ -131,13 +207,53 @@ pub fn render(
             Some(photon_pass_with(scene, accel, count, precompute.as_ref()))
         }
         _ => None,
+    }
+}
+
+/// Renders `scene` as `plan` says, on the current rayon pool: the photon
+/// pass first when the plan runs it, then the image.
+/// `progress(done_samples, total_samples)` is called after each tile (from
+/// worker threads, in completion order).
+pub fn render(
+    scene: &Scene,
+    accel: &dyn Accel,
+    plan: &RenderPlan,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> RenderOutput {
+    let start = Accumulation::new(plan.width, plan.height);
+    render_with_control(scene, accel, plan, start, &RenderControl::to_completion(progress))
+}
+
+/// Like [`render`], continuing from `start` (a fresh or resumed
+/// accumulation) under `control`. A render cancelled before it begins, or
+/// with nothing left to render, skips the photon pass and returns `start`
+/// unchanged.
+///
+/// # Panics
+/// If `start` is not `plan.width × plan.height` (callers check a resumed
+/// checkpoint against the scene first).
+pub fn render_with_control(
+    scene: &Scene,
+    accel: &dyn Accel,
+    plan: &RenderPlan,
+    start: Accumulation,
+    control: &RenderControl,
+) -> RenderOutput {
+    let begin = Instant::now();
+    let spp = plan.spp.max(1);
+    let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
+    // Nothing to render: no photon pass either.
+    let photons = if control.cancelled() || start.taken_range().0 >= limit {
+        None
+    } else {
+        photon_pass_for(scene, accel, plan)
     };
     let (map, photon_stats) = match photons {
         Some((map, stats)) => (Some(Arc::new(map)), Some(stats)),
         None => (None, None),
     };
-    let mut out = render_with_photons(scene, accel, plan, map.as_deref(), progress);
-    out.stats.wall_time = start.elapsed();
+    let mut out = render_progressive(scene, accel, plan, map.as_deref(), start, control);
+    out.stats.wall_time = begin.elapsed();
     out.stats.photons = photon_stats;
     out.photon_map = map;
     out
@@ -152,9 +268,101 @@ pub fn render_with_photons(
     photons: Option<&PhotonMap>,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> RenderOutput {
-    let start = Instant::now();
+    let start = Accumulation::new(plan.width, plan.height);
+    render_progressive(
+        scene,
+        accel,
+        plan,
+        photons,
+        start,
+        &RenderControl::to_completion(progress),
+    )
+}
+
+/// The pass loop: continues `start` with the given caustic map (or none)
+/// until every pixel has `plan.spp` samples, the sample limit is reached or
+/// the render is cancelled.
+///
+/// # Panics
+/// If `start` is not `plan.width × plan.height`.
+pub fn render_progressive(
+    scene: &Scene,
+    accel: &dyn Accel,
+    plan: &RenderPlan,
+    photons: Option<&PhotonMap>,
+    start: Accumulation,
+    control: &RenderControl,
+) -> RenderOutput {
+    let begin = Instant::now();
     let (width, height) = (plan.width, plan.height);
-    let total = width as u64 * height as u64;
+    assert!(
+        start.width == width && start.height == height && start.len() == width as usize * height as usize,
+        "accumulation is {}×{}, the plan {width}×{height}",
+        start.width,
+        start.height
+    );
+    let spp = plan.spp.max(1);
+    let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
+    let total = width as u64 * height as u64 * spp as u64;
+
+    let mut integrator = Whitted::new(scene, accel, plan);
+    if let Some(map) = photons {
+        integrator = integrator.with_photons(map);
+    }
+    let mut level = start.taken_range().0;
+    let done = AtomicU64::new(start.samples_taken());
+    let states = split_into_tiles(&start);
+    let last_checkpoint = Mutex::new(Instant::now());
+    let mut stats = RenderStats::default();
+
+    while level < limit && !control.cancelled() {
+        let target = next_pass_target(level, limit);
+        let work: Vec<PassWork> = states
+            .par_iter()
+            .map(|state| {
+                let work = {
+                    let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
+                    render_tile_pass(scene, &integrator, plan, &mut state, target, control.cancel)
+                };
+                if work.samples > 0 {
+                    let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
+                    (control.progress)(now, total);
+                }
+                if let Some(hook) = &control.checkpoint {
+                    // One worker saves; the others skip and go on rendering.
+                    if let Ok(mut last) = last_checkpoint.try_lock() {
+                        if last.elapsed() >= hook.every {
+                            (hook.save)(&snapshot(&states, width, height));
+                            *last = Instant::now();
+                        }
+                    }
+                }
+                work
+            })
+            .collect();
+        for w in work {
+            stats.rays += w.rays;
+            stats.samples += w.samples;
+            stats.dropped_samples += w.dropped;
+        }
+        if control.cancelled() {
+            break;
+        }
+        level = target;
+    }
+
+    let accumulation = snapshot(&states, width, height);
+    stats.wall_time = begin.elapsed();
+    RenderOutput {
+        film: accumulation.to_film(),
+        complete: accumulation.is_complete(spp),
+        accumulation,
+        stats,
+        photon_map: None,
+    }
+}
+
+fn tiles_of(width: u32, height: u32) -> Vec<Tile> {
     let mut tiles = Vec::new();
     for y0 in (0..height).step_by(TILE_SIZE as usize) {
         for x0 in (0..width).step_by(TILE_SIZE as usize) {
@@ -166,54 +374,81 @@ pub fn render_with_photons(
             });
         }
     }
-    let mut integrator = Whitted::new(scene, accel, plan);
-    if let Some(map) = photons {
-        integrator = integrator.with_photons(map);
-    }
-    let done = AtomicU64::new(0);
-    let results: Vec<TileResult> = tiles
-        .par_iter()
-        .map(|tile| {
-            let result = render_tile(scene, &integrator, plan, tile);
-            let n = result.pixels.len() as u64;
-            let now = done.fetch_add(n, Ordering::Relaxed) + n;
-            progress(now, total);
-            result
-        })
-        .collect();
-
-    let mut film = Film::new(width, height);
-    let mut stats = RenderStats::default();
-    for (tile, result) in tiles.iter().zip(&results) {
-        let tw = (tile.x1 - tile.x0) as usize;
-        for (i, p) in result.pixels.iter().enumerate() {
-            film.set(tile.x0 + (i % tw) as u32, tile.y0 + (i / tw) as u32, *p);
-        }
-        stats.rays += result.rays;
-        stats.samples += result.samples;
-        stats.dropped_samples += result.dropped;
-    }
-    stats.wall_time = start.elapsed();
-    RenderOutput {
-        film,
-        stats,
-        photon_map: None,
-    }
+    tiles
 }
 
-fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Tile) -> TileResult {
+fn split_into_tiles(acc: &Accumulation) -> Vec<Mutex<TileState>> {
+    let w = acc.width as usize;
+    tiles_of(acc.width, acc.height)
+        .into_iter()
+        .map(|tile| {
+            let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
+            let mut state = TileState {
+                tile,
+                sum: Vec::with_capacity(n),
+                taken: Vec::with_capacity(n),
+                kept: Vec::with_capacity(n),
+            };
+            for y in tile.y0..tile.y1 {
+                let row = y as usize * w;
+                let span = row + tile.x0 as usize..row + tile.x1 as usize;
+                state.sum.extend_from_slice(&acc.sum[span.clone()]);
+                state.taken.extend_from_slice(&acc.taken[span.clone()]);
+                state.kept.extend_from_slice(&acc.kept[span]);
+            }
+            Mutex::new(state)
+        })
+        .collect()
+}
+
+/// The whole accumulation, tile by tile (each tile locked while copied, so
+/// every pixel holds whole samples).
+fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulation {
+    let mut acc = Accumulation::new(width, height);
+    let w = width as usize;
+    for state in states {
+        let s = state.lock().unwrap_or_else(PoisonError::into_inner);
+        let tw = (s.tile.x1 - s.tile.x0) as usize;
+        for (r, y) in (s.tile.y0..s.tile.y1).enumerate() {
+            let row = y as usize * w;
+            let span = row + s.tile.x0 as usize..row + s.tile.x1 as usize;
+            let local = r * tw..(r + 1) * tw;
+            acc.sum[span.clone()].copy_from_slice(&s.sum[local.clone()]);
+            acc.taken[span.clone()].copy_from_slice(&s.taken[local.clone()]);
+            acc.kept[span].copy_from_slice(&s.kept[local]);
+        }
+    }
+    acc
+}
+
+/// Brings every pixel of the tile to `target` samples (pixels already there
+/// are left alone), in increasing sample index. Stops before the next pixel
+/// once `cancel` is set.
+fn render_tile_pass(
+    scene: &Scene,
+    integrator: &Whitted,
+    plan: &RenderPlan,
+    state: &mut TileState,
+    target: u32,
+    cancel: Option<&AtomicBool>,
+) -> PassWork {
     let spp = plan.spp.max(1);
     let (gx, gy) = grid_for(spp);
     let seed = plan.seed;
     let camera = &scene.camera;
-    let mut out = TileResult {
-        pixels: Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize),
-        rays: RayCounts::default(),
-        samples: 0,
-        dropped: 0,
-    };
+    let tile = state.tile;
+    let tw = (tile.x1 - tile.x0) as usize;
+    let mut out = PassWork::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return out;
+            }
+            let i = (y - tile.y0) as usize * tw + (x - tile.x0) as usize;
+            let first = state.taken[i];
+            if first >= target {
+                continue;
+            }
             let pixel = y as u64 * plan.width as u64 + x as u64;
             // Spread sampling: sample k takes the strata share
             // (k + rotation) mod spp. The per-pixel random rotation decouples
@@ -224,9 +459,10 @@ fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Ti
             } else {
                 0
             };
-            let mut sum = Vec3A::ZERO;
-            let mut kept = 0u32;
-            for k in 0..spp {
+            // Continue the f32 running sum exactly where it stopped.
+            let mut sum = Vec3A::from(state.sum[i]);
+            let mut kept = state.kept[i];
+            for k in first..target {
                 let mut rng = Rng::for_pixel(seed, pixel, k as u64);
                 let (jx, jy) = rng.f32x2();
                 // Stratified jittered sub-pixel position (gx × gy = spp).
@@ -247,10 +483,42 @@ fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Ti
                     out.dropped += 1;
                 }
             }
-            // Box filter: the mean of the kept samples.
-            let value = if kept > 0 { sum / kept as f32 } else { Vec3A::ZERO };
-            out.pixels.push(Vec3::from(value));
+            state.sum[i] = Vec3::from(sum);
+            state.kept[i] = kept;
+            state.taken[i] = target;
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn passes_double_then_step_by_the_cap() {
+        let mut level = 0;
+        let mut targets = Vec::new();
+        while level < 40 {
+            level = next_pass_target(level, 40);
+            targets.push(level);
+        }
+        assert_eq!(targets, [1, 2, 4, 8, 16, 24, 32, 40]);
+        assert_eq!(next_pass_target(0, 1), 1);
+        assert_eq!(next_pass_target(3, 4), 4);
+        assert_eq!(next_pass_target(5, 5), 5);
+    }
+
+    #[test]
+    fn tiles_split_and_snapshot_round_trip() {
+        let mut acc = Accumulation::new(70, 33);
+        for i in 0..acc.len() {
+            acc.sum[i] = Vec3::splat(i as f32);
+            acc.taken[i] = i as u32 % 7;
+            acc.kept[i] = i as u32 % 5;
+        }
+        let states = split_into_tiles(&acc);
+        assert_eq!(states.len(), 3 * 2);
+        assert_eq!(snapshot(&states, 70, 33), acc);
+    }
 }

@@ -1,0 +1,242 @@
+//! Interrupt and resume through the library API: a render stopped at any
+//! point (cancel flag mid-pass, sample limit, periodic checkpoint snapshot,
+//! checkpoint file round trip) and continued ends bit-identical to an
+//! uninterrupted render with the same seed.
+
+use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
+use caustic::integrator::photon::PhotonMap;
+use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
+use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
+use caustic::math::rng::Domain;
+use caustic::math::sampling::{grid_for, stratified};
+use caustic::math::{Rng, Vec2, Vec3, Vec3A};
+use caustic::scene::{load_scene, Scene};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+use std::time::Duration;
+
+/// The glass-sphere caustic scene, small: photon pass, dielectric Fresnel
+/// branches and spread area-light strata all take part.
+fn caustic_scene(spp: u32) -> Scene {
+    let mut scene = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/caustic.toml")).unwrap();
+    let s = &mut scene.settings;
+    s.width = 40;
+    s.height = 30;
+    s.spp = spp;
+    s.seed = 11;
+    s.photons.count = 20_000;
+    scene
+}
+
+fn build(scene: &Scene) -> Box<dyn Accel> {
+    accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap()
+}
+
+fn continue_from(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, start: Accumulation) -> RenderOutput {
+    render_with_control(scene, accel, plan, start, &RenderControl::to_completion(&|_, _| {}))
+}
+
+#[test]
+fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
+    let scene = caustic_scene(11);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    assert!(plan.spread(), "the test should cover spread sampling");
+    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    assert!(reference.complete);
+    assert!(reference.stats.photons.is_some(), "the photon pass should run");
+
+    // Stop at several points, most of them in the middle of a pass (the
+    // progress callback runs after each tile): pixels then hold different
+    // sample counts, and the resume must continue each from its own.
+    let total = 40 * 30 * 11;
+    for stop_at in [1, total / 7, total / 3, total * 5 / 6] {
+        let cancel = AtomicBool::new(false);
+        let progress = |done: u64, _total: u64| {
+            if done >= stop_at {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        };
+        let control = RenderControl {
+            cancel: Some(&cancel),
+            ..RenderControl::to_completion(&progress)
+        };
+        let first = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+        assert!(!first.complete, "stopped at {stop_at}");
+        let taken = first.accumulation.samples_taken();
+        assert!(
+            taken >= stop_at && taken < total,
+            "{taken} samples for a stop at {stop_at}"
+        );
+        assert_eq!(first.stats.samples, taken);
+        assert_ne!(first.film, reference.film);
+
+        let resumed = continue_from(&scene, accel.as_ref(), &plan, first.accumulation);
+        assert!(resumed.complete);
+        assert_eq!(
+            resumed.stats.samples,
+            total - taken,
+            "only the missing samples are taken"
+        );
+        assert!(
+            resumed.film == reference.film,
+            "stop at {stop_at}: the resumed film differs"
+        );
+        assert_eq!(resumed.accumulation, reference.accumulation);
+    }
+}
+
+#[test]
+fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
+    let scene = caustic_scene(6);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+
+    // A limit off the pass boundaries (passes go to 1, 2, 4, 6): the resume
+    // then groups the samples into other passes than the reference did.
+    let control = RenderControl {
+        sample_limit: Some(3),
+        ..RenderControl::to_completion(&|_, _| {})
+    };
+    let preview = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    // The partial image covers the whole frame at 3 spp: no black tiles.
+    assert_eq!(preview.accumulation.taken_range(), (3, 3));
+    assert!(!preview.complete);
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("preview.ckpt.exr");
+    let meta = CheckpointMeta {
+        width: 40,
+        height: 30,
+        spp: 6,
+        seed: 11,
+        photons: 20_000,
+        accel: "kdtree".into(),
+        fingerprint: caustic::integrator::resume::fingerprint(&scene, AccelKind::KdTree, ""),
+    };
+    write_checkpoint(&path, &preview.accumulation, &meta).unwrap();
+    let back = read_checkpoint(&path).unwrap();
+    assert_eq!(back.meta, meta);
+    assert_eq!(back.accumulation, preview.accumulation);
+
+    let resumed = continue_from(&scene, accel.as_ref(), &plan, back.accumulation);
+    assert!(resumed.film == reference.film);
+
+    // A complete accumulation resumes to itself without new samples.
+    let again = continue_from(&scene, accel.as_ref(), &plan, resumed.accumulation.clone());
+    assert_eq!(again.stats.samples, 0);
+    assert!(again.film == reference.film);
+}
+
+#[test]
+fn every_periodic_snapshot_resumes_to_the_same_image() {
+    let scene = caustic_scene(5);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    let snapshots = Mutex::new(Vec::new());
+    let save = |acc: &Accumulation| snapshots.lock().unwrap().push(acc.clone());
+    let progress = |_: u64, _: u64| {};
+    let control = RenderControl {
+        checkpoint: Some(CheckpointHook {
+            every: Duration::ZERO,
+            save: &save,
+        }),
+        ..RenderControl::to_completion(&progress)
+    };
+    // Two threads: snapshots are taken while the other worker renders.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let full = pool.install(|| render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control));
+    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    assert!(full.film == reference.film, "checkpointing must not change the image");
+
+    let snapshots = snapshots.into_inner().unwrap();
+    // 2 tiles × passes to 1, 2, 4, 5 spp: up to 8 snapshots (a worker skips
+    // saving while the other one saves).
+    assert!(
+        !snapshots.is_empty() && snapshots.len() <= 8,
+        "{} snapshots",
+        snapshots.len()
+    );
+    let mut previous = 0;
+    for (i, snap) in snapshots.iter().enumerate() {
+        let taken = snap.samples_taken();
+        assert!(taken >= previous, "snapshots only grow");
+        previous = taken;
+        let resumed = continue_from(&scene, accel.as_ref(), &plan, snap.clone());
+        assert!(resumed.film == reference.film, "snapshot {i} ({taken} samples)");
+    }
+}
+
+#[test]
+fn a_render_cancelled_before_it_starts_takes_no_sample() {
+    let scene = caustic_scene(4);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    let cancel = AtomicBool::new(true);
+    let control = RenderControl {
+        cancel: Some(&cancel),
+        ..RenderControl::to_completion(&|_, _| {})
+    };
+    let out = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    assert_eq!(out.accumulation.samples_taken(), 0);
+    assert!(out.stats.photons.is_none(), "the photon pass is skipped too");
+    assert!(!out.complete);
+}
+
+/// The film as the single-loop renderer computed it before passes existed:
+/// each pixel sums its samples 0..spp in one go, then divides by the kept
+/// count. The pass loop must give exactly these values.
+fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Option<&PhotonMap>) -> Vec<Vec3> {
+    let mut integrator = Whitted::new(scene, accel, plan);
+    if let Some(map) = map {
+        integrator = integrator.with_photons(map);
+    }
+    let spp = plan.spp;
+    let (gx, gy) = grid_for(spp);
+    let mut counts = RayCounts::default();
+    let mut pixels = Vec::new();
+    for y in 0..plan.height {
+        for x in 0..plan.width {
+            let pixel = y as u64 * plan.width as u64 + x as u64;
+            let rotation = if plan.spread() {
+                Rng::new(plan.seed, Domain::Pixel, pixel, u64::MAX).below(spp)
+            } else {
+                0
+            };
+            let (mut sum, mut kept) = (Vec3A::ZERO, 0u32);
+            for k in 0..spp {
+                let mut rng = Rng::for_pixel(plan.seed, pixel, k as u64);
+                let (jx, jy) = rng.f32x2();
+                let sub = stratified(k, gx, gy, Vec2::new(jx, jy));
+                let ray = scene
+                    .camera
+                    .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
+                let mut ctx = SampleContext {
+                    rng,
+                    slot: (k + rotation) % spp,
+                    counts: &mut counts,
+                };
+                let l = integrator.radiance(&ray, 0, &mut ctx);
+                if l.is_finite() {
+                    sum += l;
+                    kept += 1;
+                }
+            }
+            pixels.push(Vec3::from(if kept > 0 { sum / kept as f32 } else { Vec3A::ZERO }));
+        }
+    }
+    pixels
+}
+
+#[test]
+fn passes_give_the_single_loop_image_bit_for_bit() {
+    let scene = caustic_scene(13);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let expected = single_loop_film(&scene, accel.as_ref(), &plan, out.photon_map.as_deref());
+    assert!(out.film.pixels == expected, "the pass loop changed the image");
+}
