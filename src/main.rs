@@ -74,7 +74,16 @@ struct AccelArgs {
     /// Accelerator (default: embree when compiled in, else kdtree).
     #[arg(long, value_enum)]
     accel: Option<AccelArg>,
-    /// Ray–triangle test of the in-house backends (default: the scene's, watertight).
+    #[command(flatten)]
+    backend: BackendArgs,
+}
+
+/// How the accelerators are built, shared by the subcommands (those that
+/// compare several accelerators take a list instead of `--accel`).
+#[derive(Args)]
+struct BackendArgs {
+    /// Ray–triangle test of the in-house backends (default: the scene's when one
+    /// scene is rendered, else watertight).
     #[arg(long, value_enum)]
     triangle_test: Option<TriangleTestArg>,
     /// Embree BVH build quality.
@@ -101,6 +110,16 @@ impl AccelArgs {
     }
 
     fn options(&self, scene: &Scene) -> AccelOptions {
+        self.backend.options(scene)
+    }
+
+    fn apply(&self, scene: &mut Scene) {
+        self.backend.apply(scene)
+    }
+}
+
+impl BackendArgs {
+    fn options(&self, scene: &Scene) -> AccelOptions {
         AccelOptions {
             triangle_test: scene.settings.triangle_test,
             embree_quality: self.embree_quality.name().into(),
@@ -108,12 +127,16 @@ impl AccelArgs {
         }
     }
 
+    fn triangle_test(&self) -> Option<TriangleTest> {
+        self.triangle_test.map(|t| match t {
+            TriangleTestArg::Watertight => TriangleTest::Watertight,
+            TriangleTestArg::MollerTrumbore => TriangleTest::MollerTrumbore,
+        })
+    }
+
     fn apply(&self, scene: &mut Scene) {
-        if let Some(t) = self.triangle_test {
-            scene.settings.triangle_test = match t {
-                TriangleTestArg::Watertight => TriangleTest::Watertight,
-                TriangleTestArg::MollerTrumbore => TriangleTest::MollerTrumbore,
-            };
+        if let Some(t) = self.triangle_test() {
+            scene.settings.triangle_test = t;
         }
     }
 }
@@ -266,15 +289,8 @@ struct ConvergeArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Ray–triangle test of the in-house backends.
-    #[arg(long, value_enum)]
-    triangle_test: Option<TriangleTestArg>,
-    /// Embree BVH build quality.
-    #[arg(long, value_enum, default_value = "high")]
-    embree_quality: QualityArg,
-    /// Embree robust traversal mode.
-    #[arg(long)]
-    embree_robust: bool,
+    #[command(flatten)]
+    backend: BackendArgs,
     /// No progress lines.
     #[arg(short, long)]
     quiet: bool,
@@ -314,12 +330,8 @@ struct BenchArgs {
     /// Photons of the full render (default: the scene's, at most 100,000).
     #[arg(long)]
     photons: Option<u64>,
-    /// Embree BVH build quality.
-    #[arg(long, value_enum, default_value = "high")]
-    embree_quality: QualityArg,
-    /// Embree robust traversal mode.
-    #[arg(long)]
-    embree_robust: bool,
+    #[command(flatten)]
+    backend: BackendArgs,
     /// No progress lines on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -380,6 +392,16 @@ fn load(path: &Path) -> Result<Scene, Failure> {
     scene::load_scene(path).map_err(bad_input)
 }
 
+/// Applies a `--photons` override, checked like the scene file's count.
+fn override_photons(settings: &mut scene::RenderSettings, path: &Path, photons: Option<u64>) -> Result<(), Failure> {
+    if let Some(n) = photons {
+        scene::load::check_photon_count(n)
+            .map_err(|e| bad_input(anyhow::anyhow!("{}: --photons: {e}", path.display())))?;
+        settings.photons.count = n;
+    }
+    Ok(())
+}
+
 fn run_render(mut args: RenderArgs) -> Result<(), Failure> {
     let mut scene = load(&args.scene)?;
     if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
@@ -410,11 +432,7 @@ fn run_render(mut args: RenderArgs) -> Result<(), Failure> {
     s.height = args.height.unwrap_or(s.height);
     s.spp = args.spp.unwrap_or(s.spp);
     s.seed = args.seed.unwrap_or(s.seed);
-    if let Some(n) = args.photons {
-        scene::load::check_photon_count(n)
-            .map_err(|e| bad_input(anyhow::anyhow!("{}: --photons: {e}", args.scene.display())))?;
-        s.photons.count = n;
-    }
+    override_photons(s, &args.scene, args.photons)?;
     scene::load::check_image_limits(s.width, s.height, s.spp).map_err(|e| {
         bad_input(anyhow::anyhow!(
             "{}: with the command-line overrides: {e}",
@@ -442,7 +460,7 @@ fn run_render(mut args: RenderArgs) -> Result<(), Failure> {
             AccelKind::Embree => format!(
                 "quality {:?} robust {}",
                 args.accel.options(&scene).embree_quality,
-                args.accel.embree_robust
+                args.accel.backend.embree_robust
             ),
             _ => String::new(),
         };
@@ -766,24 +784,10 @@ fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     s.width = args.width.unwrap_or(s.width);
     s.height = args.height.unwrap_or(s.height);
     s.seed = args.seed.unwrap_or(s.seed);
-    if let Some(n) = args.photons {
-        scene::load::check_photon_count(n)
-            .map_err(|e| bad_input(anyhow::anyhow!("{}: --photons: {e}", args.scene.display())))?;
-        s.photons.count = n;
-    }
-    let accel_args = AccelArgs {
-        accel: None,
-        triangle_test: args.triangle_test,
-        embree_quality: args.embree_quality,
-        embree_robust: args.embree_robust,
-    };
-    accel_args.apply(&mut scene);
+    override_photons(s, &args.scene, args.photons)?;
+    args.backend.apply(&mut scene);
     let accels: Vec<AccelKind> = if args.accel.is_empty() {
-        if cfg!(feature = "embree") {
-            vec![AccelKind::Embree, AccelKind::KdTree]
-        } else {
-            vec![AccelKind::KdTree]
-        }
+        caustic::analysis::bench::default_accels()
     } else {
         args.accel.iter().map(|&a| a.into()).collect()
     };
@@ -800,7 +804,7 @@ fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         curves: CurveSpec::cross(&accels, &gathers),
         photons_per_spp: args.photons_per_spp,
         epsilon: args.epsilon,
-        accel: accel_args.options(&scene),
+        accel: args.backend.options(&scene),
     };
     let plot_size = args
         .plot_size
@@ -875,9 +879,12 @@ fn run_bench(args: BenchArgs) -> Result<(), Failure> {
             photons: args.photons,
         },
         accel_options: AccelOptions {
-            embree_quality: args.embree_quality.name().into(),
-            embree_robust: args.embree_robust,
-            ..AccelOptions::default()
+            triangle_test: args
+                .backend
+                .triangle_test()
+                .unwrap_or(AccelOptions::default().triangle_test),
+            embree_quality: args.backend.embree_quality.name().into(),
+            embree_robust: args.backend.embree_robust,
         },
     };
     let pool = rayon::ThreadPoolBuilder::new()

@@ -17,6 +17,23 @@ fn caustic(args: &[&str]) -> Output {
         .expect("run caustic")
 }
 
+/// `caustic converge` on the test scene against the shared reference, at
+/// the reference's size, with `extra` arguments.
+fn converge(extra: &[&str]) -> Output {
+    let mut args = vec![
+        "converge",
+        SCENE,
+        "--reference",
+        reference().to_str().unwrap(),
+        "--width",
+        W,
+        "--height",
+        H,
+    ];
+    args.extend_from_slice(extra);
+    caustic(&args)
+}
+
 fn text(o: &Output) -> String {
     format!(
         "status {:?}\nstdout:\n{}\nstderr:\n{}",
@@ -102,15 +119,7 @@ fn error_falls_with_budget_and_csv_and_plot_are_written() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("c.csv");
     let png = dir.path().join("c.png");
-    let o = caustic(&[
-        "converge",
-        SCENE,
-        "--reference",
-        reference().to_str().unwrap(),
-        "--width",
-        W,
-        "--height",
-        H,
+    let o = converge(&[
         "--seed",
         "3",
         "--budgets",
@@ -173,15 +182,7 @@ fn error_falls_with_budget_and_csv_and_plot_are_written() {
 fn time_budgets_use_the_doubling_search() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
-    let o = caustic(&[
-        "converge",
-        SCENE,
-        "--reference",
-        reference().to_str().unwrap(),
-        "--width",
-        W,
-        "--height",
-        H,
+    let o = converge(&[
         "--budgets",
         "0.000001s,0.5s",
         "--accel",

@@ -285,17 +285,25 @@ pub struct ErrorMetrics {
     pub mae: f64,
 }
 
+/// [`ConvergeError::SizeMismatch`] unless an image of `size` can be compared
+/// with `reference`.
+fn check_same_size((width, height): (u32, u32), reference: &Film) -> Result<(), ConvergeError> {
+    if (width, height) == (reference.width, reference.height) {
+        Ok(())
+    } else {
+        Err(ConvergeError::SizeMismatch(
+            width,
+            height,
+            reference.width,
+            reference.height,
+        ))
+    }
+}
+
 /// Compares `image` with `reference` over all pixels and the three channels
 /// (see the module documentation for the formulas).
 pub fn error_metrics(image: &Film, reference: &Film, epsilon: f64) -> Result<ErrorMetrics, ConvergeError> {
-    if (image.width, image.height) != (reference.width, reference.height) {
-        return Err(ConvergeError::SizeMismatch(
-            image.width,
-            image.height,
-            reference.width,
-            reference.height,
-        ));
-    }
+    check_same_size((image.width, image.height), reference)?;
     let (mut se, mut rel, mut abs) = (0.0f64, 0.0f64, 0.0f64);
     for (x, r) in image.pixels.iter().zip(&reference.pixels) {
         for c in 0..3 {
@@ -472,14 +480,7 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Measurement>, ConvergeError> {
     let st = &scene.settings;
-    if (st.width, st.height) != (reference.width, reference.height) {
-        return Err(ConvergeError::SizeMismatch(
-            st.width,
-            st.height,
-            reference.width,
-            reference.height,
-        ));
-    }
+    check_same_size((st.width, st.height), reference)?;
     if !(options.epsilon.is_finite() && options.epsilon > 0.0) {
         return Err(ConvergeError::Epsilon(options.epsilon));
     }
