@@ -29,6 +29,10 @@ enum Command {
     /// Cast seeded rays through two accelerators (default Embree and the
     /// KD-tree) and compare every hit; exit 1 on any disagreement that is not a tie.
     Crosscheck(CrosscheckArgs),
+    /// Numerical stress tests (watertightness, self-intersection at extreme
+    /// scales, split-plane rays, degenerate triangles, grazing rays, TIR, NaN
+    /// guards); exit 1 when a default configuration fails.
+    Stress(StressArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -185,6 +189,19 @@ struct CrosscheckArgs {
     accel: AccelArgs,
 }
 
+#[derive(Args)]
+struct StressArgs {
+    /// Also write the table as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Seed of the ray streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Rays (or trials) per case and configuration.
+    #[arg(long, default_value_t = 200_000)]
+    rays: u64,
+}
+
 #[cfg(feature = "embree")]
 const DEFAULT_A: &str = "embree";
 #[cfg(not(feature = "embree"))]
@@ -224,6 +241,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Info(args) => run_info(args),
         Command::Crosscheck(args) => run_crosscheck(args),
+        Command::Stress(args) => run_stress(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -458,5 +476,30 @@ fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
         Ok(())
     } else {
         Err(anyhow::anyhow!("{} disagreement(s) that are not ties", report.disagreement_count()).into())
+    }
+}
+
+fn run_stress(args: StressArgs) -> Result<(), Failure> {
+    use caustic::analysis::stress::{run_stress, StressOptions};
+    if let Some(path) = &args.json {
+        film::check_writable(path).map_err(bad_input)?;
+    }
+    let start = Instant::now();
+    let report = run_stress(&StressOptions {
+        seed: args.seed,
+        rays: args.rays.max(1),
+        progress: true,
+        ..StressOptions::default()
+    });
+    println!("{report}");
+    println!("stress run in {:.1} s", start.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        report
+            .write_json(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    match report.default_failures() {
+        0 => Ok(()),
+        n => Err(anyhow::anyhow!("{n} failure(s) in default configurations").into()),
     }
 }

@@ -225,6 +225,9 @@ fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Ti
                 0
             };
             let mut sum = Vec3A::ZERO;
+            // The same sum in f64: finite samples near f32::MAX overflow the
+            // f32 sum to infinity (found by `caustic stress`, case 7).
+            let mut sum64 = glam::DVec3::ZERO;
             let mut kept = 0u32;
             for k in 0..spp {
                 let mut rng = Rng::for_pixel(seed, pixel, k as u64);
@@ -242,13 +245,20 @@ fn render_tile(scene: &Scene, integrator: &Whitted, plan: &RenderPlan, tile: &Ti
                 out.samples += 1;
                 if l.is_finite() {
                     sum += l;
+                    sum64 += l.as_dvec3();
                     kept += 1;
                 } else {
                     out.dropped += 1;
                 }
             }
             // Box filter: the mean of the kept samples.
-            let value = if kept > 0 { sum / kept as f32 } else { Vec3A::ZERO };
+            let mut value = if kept > 0 { sum / kept as f32 } else { Vec3A::ZERO };
+            if !value.is_finite() {
+                // A mean of finite f32 values is at most their maximum, so
+                // the f64 mean is finite in f32; the f32 result is kept
+                // otherwise, so ordinary images do not change by a bit.
+                value = (sum64 / kept as f64).as_vec3a();
+            }
             out.pixels.push(Vec3::from(value));
         }
     }
