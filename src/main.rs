@@ -36,6 +36,10 @@ enum Command {
     /// Measure each accelerator on each scene: build time and memory, Mrays/s
     /// of camera, shadow and incoherent rays, a full render; table and JSON.
     Bench(BenchArgs),
+    /// Numerical stress tests (watertightness, self-intersection at extreme
+    /// scales, split-plane rays, degenerate triangles, grazing rays, TIR, NaN
+    /// guards); exit 1 when a default configuration fails.
+    Stress(StressArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -337,6 +341,19 @@ struct BenchArgs {
     quiet: bool,
 }
 
+#[derive(Args)]
+struct StressArgs {
+    /// Also write the table as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Seed of the ray streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Rays (or trials) per case and configuration.
+    #[arg(long, default_value_t = 200_000)]
+    rays: u64,
+}
+
 #[cfg(feature = "embree")]
 const DEFAULT_A: &str = "embree";
 #[cfg(not(feature = "embree"))]
@@ -378,6 +395,7 @@ fn main() -> ExitCode {
         Command::Crosscheck(args) => run_crosscheck(args),
         Command::Converge(args) => run_converge(args),
         Command::Bench(args) => run_bench(args),
+        Command::Stress(args) => run_stress(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -907,4 +925,29 @@ fn run_bench(args: BenchArgs) -> Result<(), Failure> {
         println!("written: {}", path.display());
     }
     Ok(())
+}
+
+fn run_stress(args: StressArgs) -> Result<(), Failure> {
+    use caustic::analysis::stress::{run_stress, StressOptions};
+    if let Some(path) = &args.json {
+        film::check_writable(path).map_err(bad_input)?;
+    }
+    let start = Instant::now();
+    let report = run_stress(&StressOptions {
+        seed: args.seed,
+        rays: args.rays.max(1),
+        progress: true,
+        ..StressOptions::default()
+    });
+    println!("{report}");
+    println!("stress run in {:.1} s", start.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        report
+            .write_json(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    match report.default_failures() {
+        0 => Ok(()),
+        n => Err(anyhow::anyhow!("{n} failure(s) in default configurations").into()),
+    }
 }

@@ -10,6 +10,7 @@ use crate::math::{Ray, Vec3A};
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
     origin: Vec3A,
+    dir: Vec3A,
     k: [usize; 3],
     shear: Vec3A,
 }
@@ -36,6 +37,7 @@ impl WatertightRay {
         let shear = Vec3A::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
         Self {
             origin: ray.origin,
+            dir: ray.dir,
             k: [kx, ky, kz],
             shear,
         }
@@ -88,9 +90,48 @@ impl WatertightRay {
         if !(t > 0.0 && t < t_max) {
             return None;
         }
+        // t is only known to δt (pbrt-v3 §3.9.2, "Conservative Ray–Triangle
+        // t Tests"): a ray leaving a surface (origin a few ulps above the
+        // triangle's plane, as `offset_ray_origin` leaves it) can get a false
+        // re-hit at t ≈ 1e-8 (seen on total-internal-reflection chains,
+        // `caustic stress` case 7). pbrt rejects every t ≤ δt, but the bound
+        // grows as 1/det and would drop real hits on distant slivers; below
+        // δt the sign of t is decided instead by the plane distance in f64.
+        let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+        let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+        let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+        let delta_z = crate::math::gamma(3) * max_zt;
+        let delta_x = crate::math::gamma(5) * (max_xt + max_zt);
+        let delta_y = crate::math::gamma(5) * (max_yt + max_zt);
+        let delta_e = 2.0 * (crate::math::gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = u.abs().max(v.abs()).max(w.abs());
+        let delta_t = 3.0 * (crate::math::gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
+        if t <= delta_t {
+            let t_plane = plane_t_f64(self.origin, self.dir, p0, p1, p2);
+            if t_plane.is_nan() || t_plane <= 0.0 {
+                return None;
+            }
+        }
+        // A zero-area triangle (collinear or repeated corners) is never hit
+        // (pbrt-v4's degenerate test): rounding in the shear can give it a
+        // tiny non-zero determinant. Checked on hits only, so it costs nothing
+        // on the misses that dominate traversal.
+        if (p1 - p0).cross(p2 - p0) == Vec3A::ZERO {
+            return None;
+        }
         // u, v, w are the weights of p0, p1, p2.
         Some((t, v * inv, w * inv))
     }
+}
+
+/// Ray parameter of the plane through `p0, p1, p2` in f64: differences and
+/// products of f32 values are exact or nearly so in f64, so its sign is right
+/// where the f32 `t` of a ray starting next to the plane is not.
+#[inline(never)]
+fn plane_t_f64(o: Vec3A, d: Vec3A, p0: Vec3A, p1: Vec3A, p2: Vec3A) -> f64 {
+    let (o, d, p0) = (o.as_dvec3(), d.as_dvec3(), p0.as_dvec3());
+    let n = (p1.as_dvec3() - p0).cross(p2.as_dvec3() - p0);
+    n.dot(p0 - o) / n.dot(d)
 }
 
 /// Möller–Trumbore 1997 (Cramer's rule on `[-D E1 E2][t u v]ᵀ = O − V0`).
@@ -115,7 +156,8 @@ pub fn moller_trumbore(ray: &Ray, p0: Vec3A, p1: Vec3A, p2: Vec3A, t_max: f32) -
         return None;
     }
     let t = e2.dot(qvec) * inv;
-    if t > 0.0 && t < t_max {
+    // Zero-area triangles are never hit (checked on hits only).
+    if t > 0.0 && t < t_max && e1.cross(e2) != Vec3A::ZERO {
         Some((t, u, v))
     } else {
         None
@@ -150,6 +192,47 @@ mod tests {
             .intersect(P[0], P[1], P[2], f32::INFINITY)
             .is_some());
         assert!(WatertightRay::new(&r).intersect(P[0], P[1], P[2], 0.5).is_none());
+    }
+
+    #[test]
+    fn no_hit_just_behind_the_origin_nor_on_zero_area_triangles() {
+        // A ray leaving the plane y = -0.1 one ulp above it (the TIR chain
+        // found by `caustic stress`): no re-hit of the plane at t ≈ 1e-8;
+        // but a ray starting 6e-6 below the plane y = 0.1 hits it.
+        let q = [
+            Vec3A::new(-2.0, -0.1, -2.0),
+            Vec3A::new(2.0, -0.1, -2.0),
+            Vec3A::new(2.0, -0.1, 2.0),
+        ];
+        let r = Ray::new(
+            Vec3A::new(-0.6425538, -0.09999994, -0.5575255),
+            Vec3A::new(-0.6059984, 0.55000025, -0.5746875),
+        );
+        assert_eq!(WatertightRay::new(&r).intersect(q[0], q[2], q[1], f32::INFINITY), None);
+        let top = [
+            Vec3A::new(-2.0, 0.1, -2.0),
+            Vec3A::new(2.0, 0.1, 2.0),
+            Vec3A::new(-2.0, 0.1, 2.0),
+        ];
+        let near = Ray::new(
+            Vec3A::new(-1.9345872, 0.099994324, 1.9),
+            Vec3A::new(0.59848577, 0.592923, -0.5387553),
+        );
+        let hit = WatertightRay::new(&near).intersect(top[0], top[1], top[2], f32::INFINITY);
+        assert!(hit.is_some_and(|(t, _, _)| t > 0.0 && t < 2e-5), "{hit:?}");
+        // Collinear corners: no hit by either test.
+        let line = [Vec3A::ZERO, Vec3A::new(1.0, 1.0, 0.0), Vec3A::new(2.0, 2.0, 0.0)];
+        let mut rng = Rng::new(5, Domain::Analysis, 0, 0);
+        for _ in 0..2_000 {
+            let s = rng.f32() * 2.0;
+            let o = Vec3A::new(rng.f32() - 0.5, rng.f32() - 0.5, 1.0);
+            let r = Ray::new(o, (Vec3A::new(s, s, 0.0) - o).normalize());
+            assert_eq!(
+                WatertightRay::new(&r).intersect(line[0], line[1], line[2], f32::INFINITY),
+                None
+            );
+            assert_eq!(moller_trumbore(&r, line[0], line[1], line[2], f32::INFINITY), None);
+        }
     }
 
     #[test]

@@ -1,9 +1,9 @@
 //! Measurements over the renderer's components: [`crosscheck`], which casts
 //! seeded rays through two accelerators and reports where they disagree,
 //! [`memory`], the process's peak memory for reports, [`rays`], seeded ray
-//! sets and their timed queries, [`bench`], `caustic bench`, and
-//! [`converge`], run time against error over increasing budgets (with its
-//! log-log [`plot`]).
+//! sets and their timed queries, [`bench`], `caustic bench`, [`converge`],
+//! run time against error over increasing budgets (with its log-log
+//! [`plot`]), and [`stress`], the numerical stress cases (`caustic stress`).
 
 pub mod bench;
 pub mod converge;
@@ -11,3 +11,4 @@ pub mod crosscheck;
 pub mod memory;
 pub mod plot;
 pub mod rays;
+pub mod stress;
