@@ -13,7 +13,7 @@
 //! number of threads. A render can be stopped (cancel flag, sample limit) at
 //! any pixel boundary; pixels never hold part of a sample.
 
-use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats};
+use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
@@ -209,11 +209,14 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
         } => {
             let precompute = match gather {
                 GatherMode::Direct => None,
-                GatherMode::Precomputed => Some(GatherParams {
-                    k: NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
-                    max_radius,
-                    cone_k,
-                }),
+                GatherMode::Precomputed => Some(Precompute::for_image(
+                    GatherParams {
+                        k: NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
+                        max_radius,
+                        cone_k,
+                    },
+                    plan.width as u64 * plan.height as u64,
+                )),
             };
             Some(photon_pass_with(scene, accel, count, precompute.as_ref()))
         }

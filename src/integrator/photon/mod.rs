@@ -21,7 +21,7 @@ pub mod precomputed;
 pub use emit::{specular_casters, Caster, PhotonTracer};
 pub use gather::GatherParams;
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
-pub use precomputed::{IrradianceSite, PRECOMPUTE_STRIDE};
+pub use precomputed::{IrradianceSite, Precompute, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 
 use crate::accel::Accel;
 use crate::scene::Scene;
@@ -41,7 +41,10 @@ impl fmt::Display for GatherMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             GatherMode::Direct => write!(f, "direct gathers"),
-            GatherMode::Precomputed => write!(f, "precomputed irradiance (1 site per {PRECOMPUTE_STRIDE} photons)"),
+            GatherMode::Precomputed => write!(
+                f,
+                "precomputed irradiance (1 site per {PRECOMPUTE_STRIDE} photons, at most {SITES_PER_PIXEL} per pixel)"
+            ),
         }
     }
 }
@@ -97,13 +100,13 @@ pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, 
 }
 
 /// [`photon_pass`], then, with `precompute`, the irradiance at every
-/// [`PRECOMPUTE_STRIDE`]-th stored photon (Christensen 1999; see
-/// [`precomputed`]).
+/// [`PRECOMPUTE_STRIDE`]-th stored photon, thinned further to at most
+/// `precompute.max_sites` sites (Christensen 1999; see [`precomputed`]).
 pub fn photon_pass_with(
     scene: &Scene,
     accel: &dyn Accel,
     count: u64,
-    precompute: Option<&GatherParams>,
+    precompute: Option<&Precompute>,
 ) -> (PhotonMap, PhotonStats) {
     let start = Instant::now();
     let tracer = PhotonTracer::new(scene, accel, count);
@@ -163,10 +166,12 @@ pub fn photon_pass_with(
     let mut map = PhotonMap::build(positions, records);
     let build_time = build_start.elapsed();
     let precompute_start = Instant::now();
+    if let Some(pre) = precompute {
+        sites = pre.thin(sites);
+    }
     let precomputed_sites = sites.len() as u64;
-    if let Some(g) = precompute {
-        sites.shrink_to_fit();
-        map.precompute_irradiance(sites, g);
+    if let Some(pre) = precompute {
+        map.precompute_irradiance(sites, &pre.gather);
     }
     let stats = PhotonStats {
         emitted: count,

@@ -8,7 +8,8 @@
 //! 64-nearest gather and its filtering) when
 //!
 //! - the nearest site lies within its own gather radius of the point (the
-//!   two estimates would share most of their photons), and
+//!   two estimates would share most of their photons; for sites thinned
+//!   below one per `k/8` photons, a multiple of it: see [`reach2`]), and
 //! - the sites' normals are within [`NORMAL_COS`] of the point's
 //!   (Christensen's normal check: a corner's two walls, or a thin wall's
 //!   two sides, keep their own irradiance);
@@ -38,6 +39,50 @@ use std::num::NonZero;
 /// site's disk still holds ≈ 8 sites, and 8 keeps the map near 32 bytes
 /// per photon.
 pub const PRECOMPUTE_STRIDE: usize = 8;
+
+/// Sites kept per image pixel, at most. A site's estimate already blurs
+/// over the `k` photons of its disk; sites much denser than the pixels add
+/// precomputation (one `k`-nearest gather each) without visible detail.
+/// With 100M photons (71M stored on the underwater floor) the stride alone
+/// gives 8.9M sites, whose gathers took longer than the image; bounded by
+/// the 2.1M pixels of a 1920×1080 frame, every 5th of them is kept and a
+/// shading point's [`INTERPOLATED_SITES`] nearest sites still span about
+/// two pixels. Below ≈ 16 stored photons per pixel the bound does not act.
+pub const SITES_PER_PIXEL: usize = 1;
+
+/// How the sites are chosen and estimated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Precompute {
+    /// The gather run at each site.
+    pub gather: GatherParams,
+    /// Largest number of sites (see [`SITES_PER_PIXEL`]).
+    pub max_sites: usize,
+}
+
+impl Precompute {
+    /// The sites for an image of `pixels` pixels.
+    pub fn for_image(gather: GatherParams, pixels: u64) -> Self {
+        Self {
+            gather,
+            max_sites: (pixels as usize).saturating_mul(SITES_PER_PIXEL).max(1),
+        }
+    }
+
+    /// Keeps every `m`-th of `sites` (in their deterministic stored order),
+    /// with `m` the smallest step that leaves at most `max_sites`.
+    pub fn thin(&self, mut sites: Vec<IrradianceSite>) -> Vec<IrradianceSite> {
+        let step = sites.len().div_ceil(self.max_sites.max(1)).max(1);
+        if step > 1 {
+            let mut i = 0;
+            sites.retain(|_| {
+                i += 1;
+                (i - 1) % step == 0
+            });
+        }
+        sites.shrink_to_fit();
+        sites
+    }
+}
 
 /// Smallest cosine between the shading normal and a site's normal for the
 /// site's estimate to be used (≈ 25°).
@@ -70,6 +115,24 @@ struct SiteEntry {
 pub(super) struct PrecomputedIrradiance {
     tree: ChunkedTree,
     entries: Vec<SiteEntry>,
+    /// Square of the factor on a site's radius within which its estimate
+    /// is used (see [`reach2`]).
+    reach2: f32,
+}
+
+/// Square of the factor `f` such that a shading point uses the sites when
+/// the nearest lies within `f·r` (`r` that site's gather radius), for
+/// `photons_per_site` stored photons per site and `k`-photon gathers.
+/// A disk of radius `f·r` holds `f²k` photons, hence `f²k/m` sites in
+/// expectation, and, in a uniform region, no site with probability
+/// `exp(−f²k/m)`. `f² = max(1, 8m/k)` keeps that chance at most `e⁻⁸`:
+/// where sites are dense (`m ≤ k/8`, every 8th photon with k = 64) this is
+/// Christensen's rule, the site's own radius; thinned sites ([`Precompute`])
+/// would otherwise send a quarter of the shading points (`e^{−k/m}` with
+/// 48 photons per site) to the full gather. A point beyond it lies at a
+/// hole or an edge of the map, where the full gather is the right answer.
+fn reach2(photons_per_site: f32, k: usize) -> f32 {
+    (8.0 * photons_per_site / k.max(1) as f32).max(1.0)
 }
 
 impl PrecomputedIrradiance {
@@ -104,7 +167,7 @@ impl PrecomputedIrradiance {
             return Vec3A::ZERO;
         };
         let r = self.entries[nearest.item as usize].radius as f32 / 65535.0 * g.max_radius;
-        if nearest.distance > r * r {
+        if nearest.distance > self.reach2 * r * r {
             return map.irradiance(p, n, g);
         }
         let d_max2 = found.iter().fold(0.0f32, |m, nb| m.max(nb.distance)) * 1.0001 + f32::MIN_POSITIVE;
@@ -149,7 +212,8 @@ impl PhotonMap {
         drop(sites);
         let (tree, order) = build_tree(positions);
         let entries = reorder(entries, &order);
-        self.precomputed = Some(PrecomputedIrradiance { tree, entries });
+        let reach2 = reach2(self.len() as f32 / entries.len().max(1) as f32, g.k.get());
+        self.precomputed = Some(PrecomputedIrradiance { tree, entries, reach2 });
     }
 
     /// Number of precomputed sites (0 when none were computed).
@@ -163,6 +227,38 @@ mod tests {
     use super::super::map::Photon;
     use super::*;
     use crate::math::rng::{Domain, Rng};
+
+    #[test]
+    fn thinning_keeps_every_mth_site_and_at_most_the_bound() {
+        let sites: Vec<IrradianceSite> = (0..1000)
+            .map(|i| IrradianceSite {
+                position: Vec3A::splat(i as f32),
+                normal: Vec3A::Y,
+            })
+            .collect();
+        let g = GatherParams {
+            k: NonZero::new(8).unwrap(),
+            max_radius: 1.0,
+            cone_k: 1.1,
+        };
+        let thin = Precompute::for_image(g, 300).thin(sites.clone());
+        // ceil(1000 / 300) = 4: sites 0, 4, 8, …
+        assert_eq!(thin.len(), 250);
+        assert!(thin.iter().enumerate().all(|(j, s)| s.position.x == (4 * j) as f32));
+        assert_eq!(Precompute::for_image(g, 5000).thin(sites.clone()), sites);
+        assert_eq!(Precompute::for_image(g, 1).thin(sites).len(), 1);
+    }
+
+    #[test]
+    fn reach_is_the_site_radius_for_dense_sites_and_grows_when_thinned() {
+        assert_eq!(reach2(8.0, 64), 1.0);
+        assert_eq!(reach2(2.0, 64), 1.0);
+        assert_eq!(reach2(48.0, 64), 6.0);
+        // A uniform region: the chance that no site is within reach stays e^-8.
+        for m in [16.0f32, 40.0, 100.0] {
+            assert!((reach2(m, 64) * 64.0 / m - 8.0).abs() < 1e-4);
+        }
+    }
 
     #[test]
     fn entries_are_ten_bytes() {
