@@ -47,8 +47,14 @@ pub const PRECOMPUTE_STRIDE: usize = 8;
 /// gives 8.9M sites, whose gathers took longer than the image; bounded by
 /// the 2.1M pixels of a 1920×1080 frame, every 5th of them is kept and a
 /// shading point's [`INTERPOLATED_SITES`] nearest sites still span about
-/// two pixels. Below ≈ 16 stored photons per pixel the bound does not act.
+/// two pixels. The bound never goes below [`MIN_SITE_BOUND`].
 pub const SITES_PER_PIXEL: usize = 1;
+
+/// Sites always allowed, whatever the image size: their precomputation is
+/// cheap (≈ 5 s for 1M sites on 2 cores) and small images rendered with
+/// many photons (references, convergence runs) keep the unthinned
+/// estimate, whose blur does not depend on the image.
+pub const MIN_SITE_BOUND: usize = 1 << 20;
 
 /// How the sites are chosen and estimated.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,7 +70,7 @@ impl Precompute {
     pub fn for_image(gather: GatherParams, pixels: u64) -> Self {
         Self {
             gather,
-            max_sites: (pixels as usize).saturating_mul(SITES_PER_PIXEL).max(1),
+            max_sites: (pixels as usize).saturating_mul(SITES_PER_PIXEL).max(MIN_SITE_BOUND),
         }
     }
 
@@ -241,12 +247,16 @@ mod tests {
             max_radius: 1.0,
             cone_k: 1.1,
         };
-        let thin = Precompute::for_image(g, 300).thin(sites.clone());
+        let bound = |max_sites| Precompute { gather: g, max_sites };
+        let thin = bound(300).thin(sites.clone());
         // ceil(1000 / 300) = 4: sites 0, 4, 8, …
         assert_eq!(thin.len(), 250);
         assert!(thin.iter().enumerate().all(|(j, s)| s.position.x == (4 * j) as f32));
-        assert_eq!(Precompute::for_image(g, 5000).thin(sites.clone()), sites);
-        assert_eq!(Precompute::for_image(g, 1).thin(sites).len(), 1);
+        assert_eq!(bound(5000).thin(sites.clone()), sites);
+        assert_eq!(bound(1).thin(sites.clone()).len(), 1);
+        // Small images keep at least MIN_SITE_BOUND sites; 1080p keeps one per pixel.
+        assert_eq!(Precompute::for_image(g, 300).thin(sites.clone()), sites);
+        assert_eq!(Precompute::for_image(g, 1920 * 1080).max_sites, 1920 * 1080);
     }
 
     #[test]
