@@ -228,6 +228,52 @@ pub(crate) fn sweep_axis(
     best
 }
 
+/// Algorithm 4 of Wald & Havran for an axis without flat references (almost
+/// every node), with no data-dependent branches: the sorted start and end
+/// keys are merged (ends first at equal positions) and every event is costed
+/// as it is taken, with `N_L` = starts taken before it and `N_R` = `n` − ends
+/// taken up to and including it. At the last end of a position, and at its
+/// first start, these are the sweep's exact counts (`N_L = #{lo < p}`,
+/// `N_R = #{hi > p}`); at the other events of the position they are larger,
+/// so the cost is no lower (it rises with the counts, and the empty-side bonus
+/// only applies to smaller counts). The first event of the lowest cost is
+/// therefore at the lowest position of the lowest exact cost, with that cost:
+/// the same choice as `sweep_axis` (with no planar references, both planar
+/// sides cost the same and `sweep_axis` puts them left).
+fn sweep_two_lists(params: &SahParams, cell: &Aabb, axis: usize, starts: &[u32], ends: &[u32]) -> Option<SplitChoice> {
+    let geometry = SplitGeometry::new(cell, axis)?;
+    let n = ends.len();
+    debug_assert_eq!(starts.len(), n);
+    if n == 0 {
+        return None;
+    }
+    let (mut i, mut j) = (0usize, 0usize);
+    let (mut found, mut best_cost, mut best_pos) = (false, 0f32, 0f32);
+    // Every start key is at most its own end key, so the starts never run
+    // out after the ends: the loop takes exactly 2n events.
+    while j < n {
+        let next_start = starts[i.min(n - 1)];
+        let take_end = (i == n) | (ends[j] <= next_start);
+        let key = if take_end { ends[j] } else { next_start };
+        let (n_left, n_right) = (i, n - j - usize::from(take_end));
+        let pos = from_order_key(key);
+        let (p_left, p_right) = geometry.probabilities(pos);
+        let cost = params.split_cost(p_left, p_right, n_left, n_right);
+        let better = (pos > geometry.lo) & (pos < geometry.hi) & (!found | (cost < best_cost));
+        found |= better;
+        best_cost = if better { cost } else { best_cost };
+        best_pos = if better { pos } else { best_pos };
+        i += usize::from(!take_end);
+        j += usize::from(take_end);
+    }
+    found.then_some(SplitChoice {
+        cost: best_cost,
+        axis,
+        pos: best_pos,
+        planar_left: true,
+    })
+}
+
 /// The parts of a cell that SAH split costs need along one axis.
 #[derive(Clone, Copy)]
 struct SplitGeometry {
@@ -467,20 +513,37 @@ impl<P: Primitives> Builder<'_, P> {
         let n = refs.len();
         let mut candidates: [Option<SplitChoice>; 3] = [None; 3];
         if n <= EXACT_MAX_PRIMS {
-            let mut events = Vec::with_capacity(2 * n);
+            // Start and end keys on the stack (no allocation per node); the
+            // rare axis with flat references takes the tagged-event sweep.
+            let mut starts = [0u32; EXACT_MAX_PRIMS];
+            let mut ends = [0u32; EXACT_MAX_PRIMS];
+            let (starts, ends) = (&mut starts[..n], &mut ends[..n]);
             for (axis, slot) in candidates.iter_mut().enumerate() {
-                events.clear();
-                for r in refs {
+                let mut flat = false;
+                for ((s, e), r) in starts.iter_mut().zip(ends.iter_mut()).zip(refs) {
                     let (lo, hi) = (r.bounds.min[axis], r.bounds.max[axis]);
-                    if lo == hi {
-                        events.push(event(lo, PLANAR, 0));
-                    } else {
-                        events.push(event(lo, START, 0));
-                        events.push(event(hi, END, 0));
-                    }
+                    flat |= lo == hi;
+                    *s = order_key(lo);
+                    *e = order_key(hi);
                 }
-                events.sort_unstable();
-                *slot = sweep_axis(&self.params, cell, axis, &events, n);
+                *slot = if flat {
+                    let mut events = Vec::with_capacity(2 * n);
+                    for r in refs {
+                        let (lo, hi) = (r.bounds.min[axis], r.bounds.max[axis]);
+                        if lo == hi {
+                            events.push(event(lo, PLANAR, 0));
+                        } else {
+                            events.push(event(lo, START, 0));
+                            events.push(event(hi, END, 0));
+                        }
+                    }
+                    events.sort_unstable();
+                    sweep_axis(&self.params, cell, axis, &events, n)
+                } else {
+                    starts.sort_unstable();
+                    ends.sort_unstable();
+                    sweep_two_lists(&self.params, cell, axis, starts, ends)
+                };
             }
         } else {
             let bins = bins_for(n);
@@ -593,8 +656,14 @@ impl<P: Primitives> Builder<'_, P> {
             let mut left = Vec::with_capacity(n);
             let mut right = Vec::with_capacity(n);
             for r in &refs {
-                left.extend(self.child_ref(r, &split, &left_cell, true));
-                right.extend(self.child_ref(r, &split, &right_cell, false));
+                match split_sides(r, &split) {
+                    (true, false) => left.push(*r),
+                    (false, true) => right.push(*r),
+                    _ => {
+                        left.extend(self.child_ref(r, &split, &left_cell, true));
+                        right.extend(self.child_ref(r, &split, &right_cell, false));
+                    }
+                }
             }
             (left, right)
         };
@@ -634,10 +703,7 @@ impl<P: Primitives> Builder<'_, P> {
     /// Havran §4.2).
     #[inline]
     fn child_ref(&self, r: &Ref, split: &SplitChoice, child_cell: &Aabb, left: bool) -> Option<Ref> {
-        let (lo, hi) = (r.bounds.min[split.axis], r.bounds.max[split.axis]);
-        let pos = split.pos;
-        let goes_left = lo < pos || (lo == pos && hi == pos && split.planar_left);
-        let goes_right = hi > pos || (lo == pos && hi == pos && !split.planar_left);
+        let (goes_left, goes_right) = split_sides(r, split);
         if left && !goes_left || !left && !goes_right {
             return None;
         }
@@ -655,18 +721,36 @@ impl<P: Primitives> Builder<'_, P> {
     }
 }
 
+/// Whether reference `r` reaches the left and the right side of `split`:
+/// primitives ending at the plane are on its left, those starting at it on its
+/// right, and those lying in it on the side the split chose.
+#[inline]
+fn split_sides(r: &Ref, split: &SplitChoice) -> (bool, bool) {
+    let (lo, hi) = (r.bounds.min[split.axis], r.bounds.max[split.axis]);
+    let pos = split.pos;
+    let in_plane = lo == pos && hi == pos;
+    (
+        lo < pos || (in_plane && split.planar_left),
+        hi > pos || (in_plane && !split.planar_left),
+    )
+}
+
 /// Min-max bin counts of `refs` in `bins` bins on the three axes of `cell`.
 fn bin_refs(refs: &[Ref], cell: &Aabb, bins: usize) -> BinCounts {
     let mut counts = BinCounts::zero();
     let ext = cell.extent();
-    for axis in 0..3 {
-        let lo = cell.min[axis];
-        let scale = if ext[axis] > 0.0 { bins as f32 / ext[axis] } else { 0.0 };
-        let bin = |x: f32| (((x - lo) * scale) as usize).min(bins - 1);
-        let (starts, ends) = (&mut counts.starts[axis], &mut counts.ends[axis]);
-        for r in refs {
-            starts[bin(r.bounds.min[axis])] += 1;
-            ends[bin(r.bounds.max[axis])] += 1;
+    let lo = cell.min;
+    let scale = Vec3A::select(ext.cmpgt(Vec3A::ZERO), Vec3A::splat(bins as f32) / ext, Vec3A::ZERO);
+    // Bin of a scaled coordinate: its integer part clamped to the bins (NaN
+    // to the first, as the `as` conversion does). Clamping in floats, three
+    // lanes at once, leaves a conversion of a value known to be in range.
+    let last = Vec3A::splat((bins - 1) as f32);
+    for r in refs {
+        let s = ((r.bounds.min - lo) * scale).max(Vec3A::ZERO).min(last).to_array();
+        let e = ((r.bounds.max - lo) * scale).max(Vec3A::ZERO).min(last).to_array();
+        for axis in 0..3 {
+            counts.starts[axis][s[axis] as usize % BINS] += 1;
+            counts.ends[axis][e[axis] as usize % BINS] += 1;
         }
     }
     counts
@@ -765,6 +849,49 @@ mod tests {
         let half = Aabb::new(Vec3A::ZERO, Vec3A::new(5.0, 1.0, 1.0)).surface_area() / sa;
         // Big box straddles (counted both sides), 5 planar on one side.
         assert_eq!(best.cost, params.split_cost(half, half, 6, 1));
+    }
+
+    /// The branch-free two-list sweep picks the same plane, cost and side as
+    /// the tagged-event sweep on boxes without flat extents, with shared
+    /// positions and −0 mixed in.
+    #[test]
+    fn two_list_sweep_matches_tagged_event_sweep() {
+        use crate::math::rng::{Domain, Rng};
+        let mut rng = Rng::new(9, Domain::Analysis, 0, 0);
+        // Coordinates on a coarse grid so that positions are often shared.
+        let coord = |rng: &mut Rng| {
+            let k = (rng.f32() * 9.0).floor() - 4.0;
+            if k == 0.0 && rng.f32() < 0.5 {
+                -0.0
+            } else {
+                k * 0.5
+            }
+        };
+        let params = SahParams::default();
+        let mut checked = 0;
+        for case in 0..600 {
+            let n = 1 + case % EXACT_MAX_PRIMS;
+            let boxes: Vec<Aabb> = (0..n)
+                .map(|_| {
+                    let (a, b, c) = (coord(&mut rng), coord(&mut rng), coord(&mut rng));
+                    let min = Vec3A::new(a, b, c);
+                    let e = Vec3A::new(0.5 + rng.f32().floor(), 0.5 * (1.0 + (rng.f32() * 3.0).floor()), 0.5);
+                    Aabb::new(min, min + e)
+                })
+                .collect();
+            let cell = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            for axis in 0..3 {
+                let mut starts: Vec<u32> = boxes.iter().map(|b| order_key(b.min[axis])).collect();
+                let mut ends: Vec<u32> = boxes.iter().map(|b| order_key(b.max[axis])).collect();
+                starts.sort_unstable();
+                ends.sort_unstable();
+                let fast = sweep_two_lists(&params, &cell, axis, &starts, &ends);
+                let reference = sweep_axis(&params, &cell, axis, &events_of(&boxes, axis), n);
+                assert_eq!(fast, reference, "case {case} axis {axis}");
+                checked += usize::from(reference.is_some());
+            }
+        }
+        assert!(checked > 1000, "{checked}");
     }
 
     #[test]
