@@ -155,7 +155,7 @@ pub fn run(options: &StressOptions) -> Vec<StressRow> {
                         let index = k as u64 * per + i;
                         let ray = grazing_ray(s, options.seed, index);
                         let hit = accel.intersect(&ray, f32::INFINITY);
-                        let mut extra = [0u64; 4];
+                        let mut extra = [0u64; 6];
                         if hit.is_some_and(|h| h.instance != 0) {
                             extra[3] += 1;
                         }

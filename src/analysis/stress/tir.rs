@@ -112,7 +112,7 @@ fn trapped_ray(slab: bool, rng: &mut Rng) -> Ray {
 
 /// One chain: `extra` `[escaped, refracted, non-finite]`.
 fn chain(scene: &Scene, accel: &dyn Accel, mut ray: Ray) -> Tally {
-    let mut extra = [0u64; 4];
+    let mut extra = [0u64; 6];
     for _ in 0..CHAIN_BOUNCES {
         let Some(hit) = accel.intersect(&ray, f32::INFINITY) else {
             extra[0] += 1;
@@ -209,7 +209,7 @@ fn chain_rows(options: &StressOptions) -> Vec<StressRow> {
                 Tally {
                     trials: 1,
                     failures: u64::from(wrong_depth || !finite),
-                    extra: [u64::from(wrong_depth), u64::from(!finite), 0, 0],
+                    extra: [u64::from(wrong_depth), u64::from(!finite), 0, 0, 0, 0],
                 }
             });
             vec![

@@ -194,7 +194,7 @@ pub fn count_misses(accel: &dyn crate::accel::Accel, rays: &[AimedRay], diag: f3
         let r = &rays[i as usize];
         let hit = accel.intersect(&r.ray, f32::INFINITY);
         let ok = hit.is_some_and(|h| h.t <= r.t_target * (1.0 + 1e-4) + 1e-6 * diag);
-        let mut extra = [0; 4];
+        let mut extra = [0; 6];
         if !ok {
             extra[r.kind as usize] += 1;
             extra[3] += u64::from(hit.is_none());
