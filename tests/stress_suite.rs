@@ -26,11 +26,10 @@ fn assert_default_rows_pass(rows: &[StressRow]) {
             r.case, r.config, r.role, r.trials, r.failures, r.note
         );
     }
-    for r in rows.iter().filter(|r| r.role != Role::Measured) {
-        assert!(r.trials > 0, "row without trials: {r:?}");
-    }
     for r in rows.iter().filter(|r| r.role == Role::Default) {
-        assert!(r.trials > 0, "default row without trials: {r:?}");
+        // Embree's rows are empty only in a build without it.
+        let not_built = !cfg!(feature = "embree") && r.config.starts_with("embree") && r.note == "not compiled in";
+        assert!(r.trials > 0 || not_built, "default row without trials: {r:?}");
         assert_eq!(r.failures, 0, "default configuration failed: {r:?}");
     }
 }
