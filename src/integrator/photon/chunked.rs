@@ -3,8 +3,8 @@
 //! 10M photons here), so large maps are first cut at the median of the
 //! longest axis, recursively ([`chunk_depth`] levels: 4 chunks from 1M
 //! points, 8 from 16M), and the chunks' trees built at once with rayon.
-//! The cut is a fixed function of the points (ties broken by index), so
-//! the structure is identical for any thread count.
+//! The cut is a fixed function of the points (a sampled median, ties
+//! broken by index), so the structure is identical for any thread count.
 //!
 //! Queries visit the chunks nearest first and skip those whose bounds lie
 //! beyond the search radius (or the current k-th distance). Items are
@@ -71,47 +71,37 @@ impl ChunkedTree {
     /// Builds the chunks over `points` with `depth` levels of median cuts.
     /// Returns the tree and `order`: `order[j]` is the index in `points` of
     /// the point that the tree calls `j`.
+    ///
+    /// The cuts are stable partitions: each chunk keeps its points in their
+    /// input order. Photons arrive in emission order, which is spatially
+    /// coherent (Morton-ordered strata), and kiddo's build (median selects
+    /// through an index array) runs about three times faster over coherent
+    /// points than over shuffled ones.
     pub fn build(points: Vec<[f32; 3]>, depth: u32) -> (Self, Vec<u32>) {
         assert!(points.len() <= u32::MAX as usize, "too many points for u32 indices");
-        let mut order: Vec<u32> = (0..points.len() as u32).collect();
-        let mut ranges = vec![(0usize, points.len())];
-        for _ in 0..depth {
-            let mut next = Vec::with_capacity(ranges.len() * 2);
-            for &(lo, hi) in &ranges {
-                if hi - lo < 2 * BUCKET {
-                    next.push((lo, hi));
-                    continue;
-                }
-                let (min, max) = bounds(&points, &order[lo..hi]);
-                let axis = (0..3)
-                    .max_by(|&a, &b| (max[a] - min[a]).total_cmp(&(max[b] - min[b])))
-                    .unwrap_or(0);
-                let mid = (hi - lo) / 2;
-                // Total order (coordinate, index): a deterministic cut.
-                order[lo..hi].select_nth_unstable_by(mid, |&i, &j| {
-                    points[i as usize][axis]
-                        .total_cmp(&points[j as usize][axis])
-                        .then(i.cmp(&j))
-                });
-                next.push((lo, lo + mid));
-                next.push((lo + mid, hi));
-            }
-            ranges = next;
+        let all: Vec<u32> = (0..points.len() as u32).collect();
+        let parts = cut(&points, all, depth);
+        let mut offsets = Vec::with_capacity(parts.len());
+        let mut total = 0usize;
+        for p in &parts {
+            offsets.push(total as u32);
+            total += p.len();
         }
-        let chunks = ranges
+        let chunks = parts
             .par_iter()
-            .map(|&(lo, hi)| {
-                let slice: Vec<[f32; 3]> = order[lo..hi].iter().map(|&i| points[i as usize]).collect();
-                let (min, max) = bounds(&points, &order[lo..hi]);
+            .zip(offsets.par_iter())
+            .map(|(idx, &offset)| {
+                let slice: Vec<[f32; 3]> = idx.iter().map(|&i| points[i as usize]).collect();
+                let (min, max) = bounds(&slice);
                 Chunk {
                     min,
                     max,
                     tree: PhotonTree::new_from_slice(&slice),
-                    offset: lo as u32,
+                    offset,
                 }
             })
             .collect();
-        (Self { chunks }, order)
+        (Self { chunks }, parts.concat())
     }
 
     /// Up to `k` nearest points within squared distance `r2` of `q`, in no
@@ -189,18 +179,64 @@ impl ChunkedTree {
     }
 }
 
-/// Bounds of `points[i]` for `i` in `idx`.
-fn bounds(points: &[[f32; 3]], idx: &[u32]) -> ([f32; 3], [f32; 3]) {
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for &i in idx {
-        let p = points[i as usize];
-        for a in 0..3 {
-            min[a] = min[a].min(p[a]);
-            max[a] = max[a].max(p[a]);
-        }
+/// Every this many points of a part, one goes into the sample whose median
+/// and bounds choose the cut (exact medians of 71M points took seconds).
+const CUT_SAMPLE_STRIDE: usize = 64;
+
+/// `depth` levels of median cuts of `idx` (indices into `points`) across the
+/// longest axis, in parallel; each part keeps the order of `idx`. The axis
+/// and the median come from a fixed sample (every [`CUT_SAMPLE_STRIDE`]-th
+/// point; the median in the total order (coordinate, index)), so the parts
+/// are a fixed function of the points and balanced to within the sample's
+/// precision.
+fn cut(points: &[[f32; 3]], idx: Vec<u32>, depth: u32) -> Vec<Vec<u32>> {
+    if depth == 0 || idx.len() < 2 * BUCKET {
+        return vec![idx];
+    }
+    let sample: Vec<u32> = idx.iter().step_by(CUT_SAMPLE_STRIDE).copied().collect();
+    let (min, max) = sample.iter().fold(EMPTY_BOUNDS, |b, &i| grow(b, &points[i as usize]));
+    let axis = (0..3)
+        .max_by(|&a, &b| (max[a] - min[a]).total_cmp(&(max[b] - min[b])))
+        .unwrap_or(0);
+    let key = |i: u32| (points[i as usize][axis], i);
+    let less = |a: (f32, u32), b: (f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let mut keys: Vec<(f32, u32)> = sample.iter().map(|&i| key(i)).collect();
+    let mid = keys.len() / 2;
+    let (_, &mut pivot, _) = keys.select_nth_unstable_by(mid, |&a, &b| less(a, b));
+    // A stable partition in blocks: each block splits in parallel, then the
+    // blocks' halves are concatenated in order.
+    let blocks: Vec<(Vec<u32>, Vec<u32>)> = idx
+        .par_chunks(1 << 16)
+        .map(|block| block.iter().partition(|&&i| less(key(i), pivot).is_lt()))
+        .collect();
+    drop(idx);
+    let mut below = Vec::with_capacity(blocks.iter().map(|b| b.0.len()).sum());
+    let mut above = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
+    for (b, a) in &blocks {
+        below.extend_from_slice(b);
+        above.extend_from_slice(a);
+    }
+    drop(blocks);
+    let (mut a, b) = rayon::join(|| cut(points, below, depth - 1), || cut(points, above, depth - 1));
+    a.extend(b);
+    a
+}
+
+type Bounds = ([f32; 3], [f32; 3]);
+
+const EMPTY_BOUNDS: Bounds = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+
+fn grow((mut min, mut max): Bounds, p: &[f32; 3]) -> Bounds {
+    for a in 0..3 {
+        min[a] = min[a].min(p[a]);
+        max[a] = max[a].max(p[a]);
     }
     (min, max)
+}
+
+/// Bounds of `points`.
+fn bounds(points: &[[f32; 3]]) -> Bounds {
+    points.iter().fold(EMPTY_BOUNDS, grow)
 }
 
 #[cfg(test)]

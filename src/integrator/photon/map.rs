@@ -22,6 +22,7 @@
 use super::chunked::{chunk_depth, ChunkedTree};
 use crate::math::{Aabb, Mat3A, Vec3A};
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
+use rayon::prelude::*;
 
 /// The tree stores positions rotated by this fixed rotation (queries are
 /// rotated alike; distances, hence the k nearest, are unchanged). Why:
@@ -126,15 +127,23 @@ pub fn encode_rgbe(c: Vec3A) -> [u8; 4] {
     if max < 1e-37 {
         return [0, 0, 0, 0];
     }
-    // max = f · 2^e with f in [0.5, 1) (frexp); one more when rounding
-    // would carry the largest mantissa to 256.
-    let mut e = (max.log2().floor() as i32 + 1).clamp(-126, 127);
-    if (max * 256.0 / 2f32.powi(e)).round() > 255.0 && e < 127 {
+    // max = f · 2^e with f in [0.5, 1) (frexp, read off the exponent bits:
+    // max is normal here); one more when rounding would carry the largest
+    // mantissa to 256. Scaling by 2^(8 − e) is exact, and done in f64 so it
+    // cannot overflow; `+ 0.5` then truncation rounds half up (x ≥ 0).
+    let mut e = (((max.to_bits() >> 23) & 0xff) as i32 - 126).clamp(-126, 127);
+    if (max as f64 * pow2_f64(8 - e) + 0.5) as u32 > 255 && e < 127 {
         e += 1;
     }
-    let scale = 256.0 / 2f32.powi(e);
-    let m = |x: f32| (x * scale).round().clamp(0.0, 255.0) as u8;
+    let scale = pow2_f64(8 - e);
+    let m = |x: f32| (x as f64 * scale + 0.5).min(255.0) as u8;
     [m(c.x), m(c.y), m(c.z), (e + 128) as u8]
+}
+
+/// `2^k` for `|k| ≤ 1022`, built from its bits.
+#[inline]
+fn pow2_f64(k: i32) -> f64 {
+    f64::from_bits(((k + 1023) as u64) << 52)
 }
 
 fn clean(x: f32) -> f32 {
@@ -176,7 +185,8 @@ pub fn encode_octahedral(v: Vec3A) -> [u16; 2] {
         x = (1.0 - ay).copysign(x);
         y = (1.0 - ax).copysign(y);
     }
-    let q = |a: f32| ((a.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).round() as u16;
+    // Round to nearest by `+ 0.5` and truncation (the value is ≥ 0): no libm call.
+    let q = |a: f32| ((a.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0 + 0.5) as u16;
     [q(x), q(y)]
 }
 
@@ -202,8 +212,8 @@ pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> (ChunkedTree, Vec<u32>) {
 }
 
 /// `items` reordered so that `out[j] = items[order[j]]`.
-pub(super) fn reorder<T: Copy>(items: Vec<T>, order: &[u32]) -> Vec<T> {
-    order.iter().map(|&i| items[i as usize]).collect()
+pub(super) fn reorder<T: Copy + Send + Sync>(items: Vec<T>, order: &[u32]) -> Vec<T> {
+    order.par_iter().map(|&i| items[i as usize]).collect()
 }
 
 /// Bytes held by a [`PhotonTree`] of `n` points: its leaves (positions and
@@ -247,7 +257,10 @@ impl PhotonMap {
     pub fn build(positions: Vec<[f32; 3]>, records: Vec<PhotonRecord>) -> Self {
         assert_eq!(positions.len(), records.len());
         assert!(positions.len() <= u32::MAX as usize, "too many photons for u32 indices");
-        let bounds = positions.iter().fold(Aabb::EMPTY, |b, p| b.grow(Vec3A::from_array(*p)));
+        let bounds = positions
+            .par_iter()
+            .fold(|| Aabb::EMPTY, |b, p| b.grow(Vec3A::from_array(*p)))
+            .reduce(|| Aabb::EMPTY, Aabb::union);
         let extent = if bounds.is_empty() {
             Vec3A::ONE
         } else {
@@ -255,7 +268,7 @@ impl PhotonMap {
         };
         let scale = Vec3A::splat(65535.0) / extent;
         let coarse = positions
-            .iter()
+            .par_iter()
             .map(|p| {
                 let q = ((Vec3A::from_array(*p) - bounds.min) * scale)
                     .round()
@@ -265,9 +278,9 @@ impl PhotonMap {
             .collect();
         let rotation = tree_rotation();
         let mut positions = positions;
-        for p in &mut positions {
-            *p = to_tree(&rotation, Vec3A::from_array(*p));
-        }
+        positions
+            .par_iter_mut()
+            .for_each(|p| *p = to_tree(&rotation, Vec3A::from_array(*p)));
         let (tree, order) = build_tree(positions);
         let records = reorder(records, &order);
         let coarse = reorder(coarse, &order);
