@@ -5,7 +5,7 @@
 
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
-use caustic::integrator::photon::PhotonMap;
+use caustic::integrator::photon::{PhotonMap, SiteCache};
 use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
 use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
 use caustic::math::rng::Domain;
@@ -220,6 +220,7 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
                     rng,
                     slot: (k + rotation) % spp,
                     counts: &mut counts,
+                    sites: &mut SiteCache::default(),
                 };
                 let l = integrator.radiance(&ray, 0, &mut ctx);
                 if l.is_finite() {

@@ -13,7 +13,7 @@
 //! number of threads. A render can be stopped (cancel flag, sample limit) at
 //! any pixel boundary; pixels never hold part of a sample.
 
-use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute};
+use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
@@ -453,6 +453,7 @@ fn render_tile_pass(
     let tile = state.tile;
     let tw = (tile.x1 - tile.x0) as usize;
     let mut out = PassWork::default();
+    let mut sites = SiteCache::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
@@ -487,6 +488,7 @@ fn render_tile_pass(
                     rng,
                     slot: (k + rotation) % spp,
                     counts: &mut out.rays,
+                    sites: &mut sites,
                 };
                 let l = integrator.radiance(&ray, 0, &mut ctx);
                 out.samples += 1;

@@ -35,7 +35,7 @@
 //!   toward the fog colour by its length inside the medium (`fog.rs`).
 
 use super::fog;
-use super::photon::{GatherParams, PhotonMap};
+use super::photon::{GatherParams, PhotonMap, SiteCache};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
 use crate::math::sampling::stratified;
@@ -86,6 +86,9 @@ pub struct SampleContext<'c> {
     pub slot: u32,
     /// Ray counters of the current tile.
     pub counts: &'c mut RayCounts,
+    /// Recent caustic site searches of the current tile: speeds up the
+    /// caustic lookups of nearby samples without changing their results.
+    pub sites: &'c mut SiteCache,
 }
 
 /// Mirror direction of `d` about the unit normal `n`: `d − 2(d·n)n`.
@@ -339,7 +342,7 @@ impl<'a> Whitted<'a> {
         }
         if !highlights_only && m.is_diffuse() {
             if let Some((map, g)) = &self.caustics {
-                out += m.diffuse * (1.0 / PI) * map.caustic_irradiance(si.p, ng, g);
+                out += m.diffuse * (1.0 / PI) * map.caustic_irradiance_cached(si.p, ng, g, ctx.sites);
             }
         }
         out

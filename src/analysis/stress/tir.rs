@@ -33,6 +33,7 @@
 use super::{box_mesh, guarded, random_unit, scene_of, share, tally, trial_rng, unavailable_row};
 use super::{Backend, Role, StressOptions, StressRow, Tally};
 use crate::accel::{self, Accel, AccelKind, AccelOptions};
+use crate::integrator::photon::SiteCache;
 use crate::integrator::render::render;
 use crate::integrator::whitted::{DielectricInterface, SampleContext, Whitted};
 use crate::integrator::{RayCounts, RenderPlan};
@@ -153,6 +154,7 @@ fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64)
         rng: trial_rng(seed, CASE, 1 << 40 | i),
         slot: 0,
         counts: &mut counts,
+        sites: &mut SiteCache::default(),
     };
     let l = integrator.radiance(ray, 0, &mut ctx);
     (counts.secondary, l.is_finite())

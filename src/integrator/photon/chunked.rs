@@ -154,6 +154,25 @@ impl ChunkedTree {
         found
     }
 
+    /// Every point within squared distance `r2` of `q` (inclusive), in no
+    /// particular order, into `out` (cleared first).
+    pub fn within(&self, q: &[f32; 3], r2: f32, out: &mut Vec<Neighbour>) {
+        out.clear();
+        for c in &self.chunks {
+            if c.distance2(q) <= r2 {
+                out.extend(
+                    c.tree
+                        .within_unsorted::<SquaredEuclidean>(q, r2)
+                        .into_iter()
+                        .map(|nb| Neighbour {
+                            distance: nb.distance,
+                            item: c.offset + nb.item,
+                        }),
+                );
+            }
+        }
+    }
+
     /// The nearest point to `q`, if any (ties by item).
     pub fn nearest_one(&self, q: &[f32; 3]) -> Option<Neighbour> {
         let mut near: Vec<(f32, &Chunk)> = self.chunks.iter().map(|c| (c.distance2(q), c)).collect();

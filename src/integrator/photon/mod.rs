@@ -21,7 +21,7 @@ pub mod precomputed;
 pub use emit::{specular_casters, Caster, PhotonTracer};
 pub use gather::GatherParams;
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
-pub use precomputed::{IrradianceSite, Precompute, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
+pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 
 use crate::accel::Accel;
 use crate::scene::Scene;
