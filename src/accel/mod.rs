@@ -38,6 +38,16 @@ pub trait Accel: Send + Sync {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit>;
     /// True when anything is hit with `0 < t < t_max` (any-hit; shadow rays).
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
+    /// Closest hits of many rays: `hits[i]` for `rays[i]`, with
+    /// `0 < t < t_max` (same length). The default asks
+    /// [`intersect`](Self::intersect) for each; Embree traces packets. A
+    /// backend may return a `t`, `u` or `v` a few ulps from its one-ray answer.
+    fn intersect_many(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len());
+        for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+            *hit = self.intersect(ray, t_max);
+        }
+    }
     /// Build statistics.
     fn stats(&self) -> AccelStats;
 }

@@ -481,6 +481,68 @@ impl CommittedScene {
         (rayhit.hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then_some(rayhit)
     }
 
+    /// Closest hits of up to [`sys::PACKET_SIZE`] rays with `0 < t < t_max`,
+    /// traced as one packet (`rtcIntersect16`): `out[i]` for `rays[i]`.
+    fn intersect_packet(&self, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+        assert!(rays.len() <= sys::PACKET_SIZE && out.len() == rays.len());
+        let n = sys::PACKET_SIZE;
+        let mut packet = sys::RTCRayHit16 {
+            org_x: [0.0; 16],
+            org_y: [0.0; 16],
+            org_z: [0.0; 16],
+            tnear: [0.0; 16],
+            dir_x: [0.0; 16],
+            dir_y: [0.0; 16],
+            dir_z: [0.0; 16],
+            time: [0.0; 16],
+            tfar: [0.0; 16],
+            mask: [u32::MAX; 16],
+            id: [0; 16],
+            flags: [0; 16],
+            Ng_x: [0.0; 16],
+            Ng_y: [0.0; 16],
+            Ng_z: [0.0; 16],
+            u: [0.0; 16],
+            v: [0.0; 16],
+            primID: [sys::RTC_INVALID_GEOMETRY_ID; 16],
+            geomID: [sys::RTC_INVALID_GEOMETRY_ID; 16],
+            instID: [[sys::RTC_INVALID_GEOMETRY_ID; 16]; 1],
+            instPrimID: [[sys::RTC_INVALID_GEOMETRY_ID; 16]; 1],
+        };
+        let mut valid = [0i32; 16];
+        for (i, ray) in rays.iter().enumerate() {
+            if let Some(r) = make_ray(ray, t_max) {
+                packet.org_x[i] = r.org_x;
+                packet.org_y[i] = r.org_y;
+                packet.org_z[i] = r.org_z;
+                packet.tnear[i] = r.tnear;
+                packet.dir_x[i] = r.dir_x;
+                packet.dir_y[i] = r.dir_y;
+                packet.dir_z[i] = r.dir_z;
+                packet.tfar[i] = r.tfar;
+                valid[i] = -1;
+            }
+        }
+        debug_assert_eq!(n, valid.len());
+        // SAFETY: committed scene; `valid` has 16 entries and `packet` is a
+        // fully initialised, 64-byte aligned RTCRayHit16 (layout pinned by
+        // the sys tests) that Embree writes only in valid lanes; null
+        // arguments select Embree's defaults.
+        unsafe { sys::rtcIntersect16(valid.as_ptr(), self.inner.raw, &mut packet, std::ptr::null_mut()) };
+        for (i, hit) in out.iter_mut().enumerate() {
+            *hit = (valid[i] != 0 && packet.geomID[i] != sys::RTC_INVALID_GEOMETRY_ID).then(|| {
+                hit_record(
+                    packet.tfar[i],
+                    packet.geomID[i],
+                    packet.primID[i],
+                    packet.instID[0][i],
+                    packet.u[i],
+                    packet.v[i],
+                )
+            });
+        }
+    }
+
     /// Any hit with `0 < t < t_max`.
     #[inline]
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
@@ -522,6 +584,25 @@ fn make_ray(ray: &Ray, t_max: f32) -> Option<sys::RTCRay> {
         id: 0,
         flags: 0,
     })
+}
+
+/// The [`Hit`] of an Embree hit record: a mesh hit is reported through its
+/// instance (the TLAS geometry ID of the object), an analytic shape by its
+/// own geometry ID (no enclosing instance, primitive 0).
+#[inline]
+fn hit_record(t: f32, geom_id: u32, prim_id: u32, inst_id: u32, u: f32, v: f32) -> Hit {
+    let (instance, prim) = if inst_id != sys::RTC_INVALID_GEOMETRY_ID {
+        (inst_id, prim_id)
+    } else {
+        (geom_id, 0)
+    };
+    Hit {
+        t,
+        instance,
+        prim,
+        u,
+        v,
+    }
 }
 
 /// An analytic shape in the TLAS (user geometry data).
@@ -758,19 +839,28 @@ impl Accel for EmbreeAccel {
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let rh = self.tlas.intersect_raw(ray, t_max)?;
-        let inst = rh.hit.instID[0];
-        let (instance, prim) = if inst != sys::RTC_INVALID_GEOMETRY_ID {
-            (inst, rh.hit.primID)
-        } else {
-            (rh.hit.geomID, 0)
-        };
-        Some(Hit {
-            t: rh.ray.tfar,
-            instance,
-            prim,
-            u: rh.hit.u,
-            v: rh.hit.v,
-        })
+        Some(hit_record(
+            rh.ray.tfar,
+            rh.hit.geomID,
+            rh.hit.primID,
+            rh.hit.instID[0],
+            rh.hit.u,
+            rh.hit.v,
+        ))
+    }
+
+    /// Packets of 16 rays (`rtcIntersect16`); a lone ray goes alone. For
+    /// coherent rays (photons leaving one light in neighbouring directions)
+    /// Embree's packet traversal shares the node tests across the lanes.
+    fn intersect_many(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len());
+        for (rays, hits) in rays.chunks(sys::PACKET_SIZE).zip(hits.chunks_mut(sys::PACKET_SIZE)) {
+            if let [ray] = rays {
+                hits[0] = self.intersect(ray, t_max);
+            } else {
+                self.tlas.intersect_packet(rays, t_max, hits);
+            }
+        }
     }
 
     #[inline]

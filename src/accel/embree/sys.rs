@@ -113,6 +113,39 @@ pub struct RTCRayHit {
 }
 
 /// `struct RTCBounds` (16-byte aligned).
+/// Lanes of the packets caustic traces (`rtcIntersect16`).
+pub const PACKET_SIZE: usize = 16;
+
+/// `RTCRayHit16`: a ray packet and its hits in structure-of-arrays layout
+/// (`RTCRay16` then `RTCHit16`, each field an array over the lanes), 64-byte
+/// aligned as `rtcIntersect16` requires. `instPrimID` is present as in
+/// [`RTCHit`] (see there).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCRayHit16 {
+    pub org_x: [f32; PACKET_SIZE],
+    pub org_y: [f32; PACKET_SIZE],
+    pub org_z: [f32; PACKET_SIZE],
+    pub tnear: [f32; PACKET_SIZE],
+    pub dir_x: [f32; PACKET_SIZE],
+    pub dir_y: [f32; PACKET_SIZE],
+    pub dir_z: [f32; PACKET_SIZE],
+    pub time: [f32; PACKET_SIZE],
+    pub tfar: [f32; PACKET_SIZE],
+    pub mask: [u32; PACKET_SIZE],
+    pub id: [u32; PACKET_SIZE],
+    pub flags: [u32; PACKET_SIZE],
+    pub Ng_x: [f32; PACKET_SIZE],
+    pub Ng_y: [f32; PACKET_SIZE],
+    pub Ng_z: [f32; PACKET_SIZE],
+    pub u: [f32; PACKET_SIZE],
+    pub v: [f32; PACKET_SIZE],
+    pub primID: [u32; PACKET_SIZE],
+    pub geomID: [u32; PACKET_SIZE],
+    pub instID: [[u32; PACKET_SIZE]; 1],
+    pub instPrimID: [[u32; PACKET_SIZE]; 1],
+}
+
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RTCBounds {
@@ -196,6 +229,7 @@ extern "C" {
     pub fn rtcIntersect1(scene: RTCScene, rayhit: *mut RTCRayHit, args: *mut c_void);
     /// `args` is a nullable `RTCOccludedArguments*` (null: defaults).
     pub fn rtcOccluded1(scene: RTCScene, ray: *mut RTCRay, args: *mut c_void);
+    pub fn rtcIntersect16(valid: *const i32, scene: RTCScene, rayhit: *mut RTCRayHit16, args: *mut c_void);
 
     pub fn rtcNewGeometry(device: RTCDevice, kind: RTCGeometryType) -> RTCGeometry;
     pub fn rtcReleaseGeometry(geometry: RTCGeometry);
@@ -261,6 +295,22 @@ mod tests {
         assert_eq!(offset_of!(RTCRayHit, hit), 48);
         assert_eq!(size_of::<RTCRayHit>(), 96);
         assert_eq!(align_of::<RTCRayHit>(), 16);
+    }
+
+    #[test]
+    fn packet_layout_matches_rtcore_ray_h() {
+        // RTCRayHitN with N = 16: field k of the ray at float 16·k, the hit
+        // from float 12·16 (RTCRayHitN_HitN), its field k at 16·(12 + k).
+        assert_eq!(align_of::<RTCRayHit16>(), 64);
+        assert_eq!(offset_of!(RTCRayHit16, tnear), 3 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, tfar), 8 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, flags), 11 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, Ng_x), 12 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, u), 15 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, primID), 17 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, geomID), 18 * 64);
+        assert_eq!(offset_of!(RTCRayHit16, instID), 19 * 64);
+        assert_eq!(size_of::<RTCRayHit16>(), 21 * 64);
     }
 
     #[test]

@@ -46,7 +46,7 @@
 //! bounces. Inside a medium the power is attenuated by `exp(−σ d)`.
 
 use super::map::Photon;
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::integrator::fog;
 use crate::integrator::whitted::{fresnel_schlick, reflect, DielectricInterface};
 use crate::math::rng::{Domain, Rng};
@@ -112,14 +112,38 @@ pub struct PhotonTracer<'a> {
     max_depth: u32,
 }
 
-/// What tracing one photon produced.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct TraceResult {
-    /// The stored photon, if it reached a diffuse surface after a specular bounce.
-    pub photon: Option<Photon>,
-    /// Rays cast.
-    pub rays: u32,
+/// A photon in flight: its next ray, its power and its own random stream.
+#[derive(Clone, Debug)]
+pub struct PhotonPath {
+    /// Emission index (orders the stored photons).
+    pub index: u64,
+    rng: Rng,
+    ray: Ray,
+    power: Vec3A,
+    bounces: u32,
 }
+
+impl PhotonPath {
+    /// The ray the photon travels along next.
+    pub fn ray(&self) -> &Ray {
+        &self.ray
+    }
+}
+
+/// What a photon did at the end of its current ray.
+#[derive(Clone, Copy, Debug)]
+pub enum Step {
+    /// Bounced off a specular surface: the path holds the next ray.
+    Continue,
+    /// Reached a diffuse surface after a specular bounce: stored.
+    Stored(Photon),
+    /// Escaped, absorbed, or ended on a surface before any specular bounce.
+    Done,
+}
+
+/// Photons traced together by [`PhotonTracer::trace_range`]: their rays go
+/// to the accelerator as one batch per bounce.
+const WAVEFRONT: usize = 256;
 
 impl<'a> PhotonTracer<'a> {
     /// Prepares emission of `count` photons in total.
@@ -176,11 +200,11 @@ impl<'a> PhotonTracer<'a> {
         !self.emitters.is_empty()
     }
 
-    /// Emits and traces photon `index` from its own random stream.
-    pub fn trace(&self, index: u64) -> TraceResult {
-        let mut out = TraceResult::default();
+    /// Emits photon `index` from its own random stream: its first ray and
+    /// power, or `None` when it carries nothing.
+    pub fn emit(&self, index: u64) -> Option<PhotonPath> {
         if self.emitters.is_empty() {
-            return out;
+            return None;
         }
         let mut rng = Rng::new(self.seed, Domain::Photon, index, 0);
         let u = rng.f32();
@@ -202,7 +226,7 @@ impl<'a> PhotonTracer<'a> {
                     Some((dir, solid_angle)) => {
                         let cos = dir.dot(a.normal);
                         if cos <= 0.0 {
-                            return out; // behind the one-sided emitter: no power
+                            return None; // behind the one-sided emitter: no power
                         }
                         (x, dir, a.radiance * (a.area() * cos * solid_angle * scale))
                     }
@@ -213,8 +237,57 @@ impl<'a> PhotonTracer<'a> {
                 }
             }
         };
-        self.follow(Ray::new(origin, dir), power, &mut rng, &mut out);
-        out
+        Some(PhotonPath {
+            index,
+            rng,
+            ray: Ray::new(origin, dir),
+            power,
+            bounces: 0,
+        })
+    }
+
+    /// Traces photons `first..last` and returns the stored ones with their
+    /// emission indices, in index order, and the number of rays cast. The photons advance together:
+    /// each bounce's rays (up to [`WAVEFRONT`] neighbouring photons, in
+    /// index order, hence coherent) go to [`Accel::intersect_many`] as one
+    /// batch. Each photon's path depends only on its own stream, so the
+    /// result is the same as tracing them one by one.
+    pub fn trace_range(&self, first: u64, last: u64) -> (Vec<(u64, Photon)>, u64) {
+        let mut stored = Vec::new();
+        let mut rays = 0u64;
+        let mut batch: Vec<Ray> = Vec::with_capacity(WAVEFRONT);
+        let mut hits: Vec<Option<Hit>> = Vec::with_capacity(WAVEFRONT);
+        let mut start = first;
+        while start < last {
+            let end = (start + WAVEFRONT as u64).min(last);
+            let mut paths: Vec<PhotonPath> = (start..end).filter_map(|i| self.emit(i)).collect();
+            let mut wave: Vec<(u64, Photon)> = Vec::new();
+            while !paths.is_empty() {
+                batch.clear();
+                batch.extend(paths.iter().map(|p| p.ray));
+                hits.clear();
+                hits.resize(paths.len(), None);
+                self.accel.intersect_many(&batch, f32::INFINITY, &mut hits);
+                rays += paths.len() as u64;
+                let mut kept = 0;
+                for i in 0..paths.len() {
+                    match self.step(&mut paths[i], hits[i]) {
+                        Step::Continue => {
+                            paths.swap(kept, i);
+                            kept += 1;
+                        }
+                        Step::Stored(photon) => wave.push((paths[i].index, photon)),
+                        Step::Done => {}
+                    }
+                }
+                paths.truncate(kept);
+            }
+            // Photons store in the order their paths ended: back to index order.
+            wave.sort_unstable_by_key(|&(index, _)| index);
+            stored.append(&mut wave);
+            start = end;
+        }
+        (stored, rays)
     }
 
     /// The cone choice and the 2-D direction sample of photon `index`:
@@ -229,80 +302,79 @@ impl<'a> PhotonTracer<'a> {
         (m[0], Vec2::new(m[1], m[2]))
     }
 
-    fn follow(&self, mut ray: Ray, mut power: Vec3A, rng: &mut Rng, out: &mut TraceResult) {
-        let medium = self.scene.settings.medium.as_ref();
-        let mut bounces = 0u32;
-        loop {
-            out.rays += 1;
-            let Some(hit) = self.accel.intersect(&ray, f32::INFINITY) else {
-                return;
-            };
-            if let Some(m) = medium {
-                power *= fog::transmittance(m, &ray, hit.t);
-            }
-            let si = self.scene.surface_interaction(&ray, &hit);
-            let m = &self.scene.materials[si.material as usize];
-            let dir = if let Some(d) = m.dielectric {
-                if bounces >= self.max_depth {
-                    return;
-                }
-                let DielectricInterface {
-                    n1,
-                    n2,
-                    reflected,
-                    refracted,
-                } = DielectricInterface::at(ray.dir, &si, d.ior);
-                match refracted {
-                    None => reflected,
-                    Some((t, cos_i, cos_t)) => {
-                        if rng.f32() < fresnel_schlick(n1, n2, cos_i, cos_t) {
-                            reflected
-                        } else {
-                            power *= d.tint;
-                            t
-                        }
-                    }
-                }
-            } else {
-                let r = m.mirror.map_or(0.0, |mm| mm.reflectivity);
-                let reflects = r > 0.0 && (r >= 1.0 || rng.f32() < r);
-                if !reflects {
-                    if bounces >= 1 && m.is_diffuse() {
-                        let incoming = -ray.dir;
-                        out.photon = Some(Photon {
-                            position: si.p,
-                            incoming,
-                            // The side the photon arrived on: where the
-                            // precomputed irradiance at this photon applies.
-                            normal: if si.ng.dot(incoming) >= 0.0 { si.ng } else { -si.ng },
-                            power: power / (1.0 - r),
-                        });
-                    }
-                    return;
-                }
-                if bounces >= self.max_depth {
-                    return;
-                }
-                let mirror = m.mirror.expect("reflects implies a mirror");
-                power *= mirror.tint;
-                let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
-                    (-si.ng, -si.ns)
-                } else {
-                    (si.ng, si.ns)
-                };
-                let mut dir = reflect(ray.dir, ns);
-                if dir.dot(ng) <= 0.0 {
-                    dir = reflect(ray.dir, ng);
-                }
-                dir
-            };
-            if !power.is_finite() || power.max_element() <= 0.0 {
-                return;
-            }
-            bounces += 1;
-            let dir = dir.normalize();
-            ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, dir), dir);
+    /// Advances `path` past `hit`, the end of its current ray (`None`: it
+    /// left the scene).
+    pub fn step(&self, path: &mut PhotonPath, hit: Option<Hit>) -> Step {
+        let Some(hit) = hit else {
+            return Step::Done;
+        };
+        let ray = path.ray;
+        if let Some(m) = self.scene.settings.medium.as_ref() {
+            path.power *= fog::transmittance(m, &ray, hit.t);
         }
+        let si = self.scene.surface_interaction(&ray, &hit);
+        let m = &self.scene.materials[si.material as usize];
+        let dir = if let Some(d) = m.dielectric {
+            if path.bounces >= self.max_depth {
+                return Step::Done;
+            }
+            let DielectricInterface {
+                n1,
+                n2,
+                reflected,
+                refracted,
+            } = DielectricInterface::at(ray.dir, &si, d.ior);
+            match refracted {
+                None => reflected,
+                Some((t, cos_i, cos_t)) => {
+                    if path.rng.f32() < fresnel_schlick(n1, n2, cos_i, cos_t) {
+                        reflected
+                    } else {
+                        path.power *= d.tint;
+                        t
+                    }
+                }
+            }
+        } else {
+            let r = m.mirror.map_or(0.0, |mm| mm.reflectivity);
+            let reflects = r > 0.0 && (r >= 1.0 || path.rng.f32() < r);
+            if !reflects {
+                if path.bounces >= 1 && m.is_diffuse() {
+                    let incoming = -ray.dir;
+                    return Step::Stored(Photon {
+                        position: si.p,
+                        incoming,
+                        // The side the photon arrived on: where the
+                        // precomputed irradiance at this photon applies.
+                        normal: if si.ng.dot(incoming) >= 0.0 { si.ng } else { -si.ng },
+                        power: path.power / (1.0 - r),
+                    });
+                }
+                return Step::Done;
+            }
+            if path.bounces >= self.max_depth {
+                return Step::Done;
+            }
+            let mirror = m.mirror.expect("reflects implies a mirror");
+            path.power *= mirror.tint;
+            let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
+                (-si.ng, -si.ns)
+            } else {
+                (si.ng, si.ns)
+            };
+            let mut dir = reflect(ray.dir, ns);
+            if dir.dot(ng) <= 0.0 {
+                dir = reflect(ray.dir, ng);
+            }
+            dir
+        };
+        if !path.power.is_finite() || path.power.max_element() <= 0.0 {
+            return Step::Done;
+        }
+        path.bounces += 1;
+        let dir = dir.normalize();
+        path.ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, dir), dir);
+        Step::Continue
     }
 }
 

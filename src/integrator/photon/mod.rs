@@ -136,20 +136,20 @@ pub fn photon_pass_with(
             .map(|c| {
                 let first = batch_start + c * CHUNK;
                 let last = (first + CHUNK).min(batch_end);
-                let mut out = TracedChunk::default();
-                for i in first..last {
-                    let r = tracer.trace(i);
-                    out.rays += r.rays as u64;
-                    if let Some(p) = r.photon {
-                        if p.position.is_finite() && p.power.is_finite() {
-                            out.positions.push(p.position.to_array());
-                            out.records.push(PhotonRecord::new(p.power, p.incoming));
-                            if precompute.is_some() && i % PRECOMPUTE_STRIDE as u64 == 0 {
-                                out.sites.push(IrradianceSite {
-                                    position: p.position,
-                                    normal: p.normal,
-                                });
-                            }
+                let (photons, rays) = tracer.trace_range(first, last);
+                let mut out = TracedChunk {
+                    rays,
+                    ..TracedChunk::default()
+                };
+                for (i, p) in photons {
+                    if p.position.is_finite() && p.power.is_finite() {
+                        out.positions.push(p.position.to_array());
+                        out.records.push(PhotonRecord::new(p.power, p.incoming));
+                        if precompute.is_some() && i % PRECOMPUTE_STRIDE as u64 == 0 {
+                            out.sites.push(IrradianceSite {
+                                position: p.position,
+                                normal: p.normal,
+                            });
                         }
                     }
                 }
