@@ -91,6 +91,27 @@ fn compact_every_third(x: u64) -> u32 {
     x as u32
 }
 
+/// The 3-D Morton code of `cell` (21 bits per axis): bit `l` of axis `a`
+/// goes to bit `3l + 2 − a`, so sorting by the code orders cells along a
+/// Z-order curve (axis 0 the most significant of each triple, as in
+/// [`morton_stratified`]).
+pub fn morton_code(cell: [u32; 3]) -> u64 {
+    (spread_every_third(cell[0]) << 2) | (spread_every_third(cell[1]) << 1) | spread_every_third(cell[2])
+}
+
+/// The low 21 bits of `x` moved to bits 0, 3, 6, …, 60 (the inverse of
+/// [`compact_every_third`]).
+#[inline]
+fn spread_every_third(x: u32) -> u64 {
+    let mut x = (x & 0x1f_ffff) as u64;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
 /// A near-square grid `nx × ny` with `nx·ny = n` exactly when n has such a
 /// factorisation, else the closest from below (nx = ⌊√n⌋, ny = ⌈n/nx⌉).
 pub fn grid_for(n: u32) -> (u32, u32) {
@@ -115,6 +136,26 @@ mod tests {
             let want = (0..21).fold(0u32, |acc, i| acc | ((((x >> (3 * i)) & 1) as u32) << i));
             assert_eq!(compact_every_third(x), want, "{x:#x}");
         }
+    }
+
+    #[test]
+    fn morton_code_interleaves_and_round_trips() {
+        let mut r = Rng::new(6, Domain::Analysis, 0, 0);
+        for _ in 0..1000 {
+            let cell = [r.u32() & 0x1f_ffff, r.u32() & 0x1f_ffff, r.u32() & 0x1f_ffff];
+            let code = morton_code(cell);
+            assert_eq!(
+                [
+                    compact_every_third(code >> 2),
+                    compact_every_third(code >> 1),
+                    compact_every_third(code)
+                ],
+                cell
+            );
+        }
+        assert_eq!(morton_code([1, 0, 0]), 4);
+        assert_eq!(morton_code([0, 1, 1]), 3);
+        assert_eq!(morton_code([2, 0, 0]), 32);
     }
 
     #[test]

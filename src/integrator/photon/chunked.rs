@@ -30,13 +30,15 @@ pub fn chunk_depth(n: usize) -> u32 {
     }
 }
 
-/// One chunk: its points' bounds (tree coordinates), its tree and the
-/// concatenated index of its first point.
+/// One chunk: its points' bounds (tree coordinates), its tree, the
+/// concatenated index of its first point, and, when kept, its points in
+/// item order.
 struct Chunk {
     min: [f32; 3],
     max: [f32; 3],
     tree: PhotonTree,
     offset: u32,
+    points: Vec<[f32; 3]>,
 }
 
 impl Chunk {
@@ -77,7 +79,10 @@ impl ChunkedTree {
     /// coherent (Morton-ordered strata), and kiddo's build (median selects
     /// through an index array) runs about three times faster over coherent
     /// points than over shuffled ones.
-    pub fn build(points: Vec<[f32; 3]>, depth: u32) -> (Self, Vec<u32>) {
+    ///
+    /// With `keep_points`, each chunk keeps its points in item order (12
+    /// bytes each) for [`within_points`](Self::within_points).
+    pub fn build(points: Vec<[f32; 3]>, depth: u32, keep_points: bool) -> (Self, Vec<u32>) {
         assert!(points.len() <= u32::MAX as usize, "too many points for u32 indices");
         let all: Vec<u32> = (0..points.len() as u32).collect();
         let parts = cut(&points, all, depth);
@@ -87,21 +92,49 @@ impl ChunkedTree {
             offsets.push(total as u32);
             total += p.len();
         }
-        let chunks = parts
+        let slices: Vec<Vec<[f32; 3]>> = parts
             .par_iter()
+            .map(|idx| idx.iter().map(|&i| points[i as usize]).collect())
+            .collect();
+        drop(points);
+        let chunks = slices
+            .into_par_iter()
             .zip(offsets.par_iter())
-            .map(|(idx, &offset)| {
-                let slice: Vec<[f32; 3]> = idx.iter().map(|&i| points[i as usize]).collect();
-                let (min, max) = bounds(&slice);
+            .map(|(points, &offset)| {
+                let (min, max) = bounds(&points);
                 Chunk {
                     min,
                     max,
-                    tree: PhotonTree::new_from_slice(&slice),
+                    tree: PhotonTree::new_from_slice(&points),
                     offset,
+                    points: if keep_points { points } else { Vec::new() },
                 }
             })
             .collect();
         (Self { chunks }, parts.concat())
+    }
+
+    /// Bytes held by the kept copies of the points.
+    pub fn points_bytes(&self) -> usize {
+        self.chunks.iter().map(|c| c.points.len() * 12).sum()
+    }
+
+    /// Every point within squared distance `r2` of `q` (inclusive) with its
+    /// position, in no particular order, into `out` (cleared first). Needs
+    /// the points kept (`build`).
+    pub fn within_points(&self, q: &[f32; 3], r2: f32, out: &mut Vec<([f32; 3], u32)>) {
+        out.clear();
+        for c in &self.chunks {
+            if c.distance2(q) <= r2 {
+                debug_assert!(c.points.len() == c.tree.size(), "points forgotten");
+                out.extend(
+                    c.tree
+                        .within_unsorted::<SquaredEuclidean>(q, r2)
+                        .into_iter()
+                        .filter_map(|nb| Some((*c.points.get(nb.item as usize)?, c.offset + nb.item))),
+                );
+            }
+        }
     }
 
     /// Up to `k` nearest points within squared distance `r2` of `q`, in no
@@ -152,25 +185,6 @@ impl ChunkedTree {
             }
         }
         found
-    }
-
-    /// Every point within squared distance `r2` of `q` (inclusive), in no
-    /// particular order, into `out` (cleared first).
-    pub fn within(&self, q: &[f32; 3], r2: f32, out: &mut Vec<Neighbour>) {
-        out.clear();
-        for c in &self.chunks {
-            if c.distance2(q) <= r2 {
-                out.extend(
-                    c.tree
-                        .within_unsorted::<SquaredEuclidean>(q, r2)
-                        .into_iter()
-                        .map(|nb| Neighbour {
-                            distance: nb.distance,
-                            item: c.offset + nb.item,
-                        }),
-                );
-            }
-        }
     }
 
     /// The nearest point to `q`, if any (ties by item).
@@ -273,7 +287,7 @@ mod tests {
                 [a * 4.0, (a * 13.0).fract(), b * 2.0]
             })
             .collect();
-        let (tree, order) = ChunkedTree::build(points.clone(), 3);
+        let (tree, order) = ChunkedTree::build(points.clone(), 3, false);
         assert_eq!(tree.chunks.len(), 8);
         let mut sorted = order.clone();
         sorted.sort_unstable();

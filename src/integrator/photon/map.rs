@@ -206,9 +206,9 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
 
 /// Builds the chunked trees over `positions` (already in tree
 /// coordinates); see [`super::chunked`] for the returned order.
-pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> (ChunkedTree, Vec<u32>) {
+pub(super) fn build_tree(positions: Vec<[f32; 3]>, keep_points: bool) -> (ChunkedTree, Vec<u32>) {
     let depth = chunk_depth(positions.len());
-    ChunkedTree::build(positions, depth)
+    ChunkedTree::build(positions, depth, keep_points)
 }
 
 /// `items` reordered so that `out[j] = items[order[j]]`.
@@ -281,7 +281,7 @@ impl PhotonMap {
         positions
             .par_iter_mut()
             .for_each(|p| *p = to_tree(&rotation, Vec3A::from_array(*p)));
-        let (tree, order) = build_tree(positions);
+        let (tree, order) = build_tree(positions, false);
         let records = reorder(records, &order);
         let coarse = reorder(coarse, &order);
         Self {

@@ -16,6 +16,7 @@ pub mod chunked;
 pub mod emit;
 pub mod gather;
 pub mod map;
+pub mod neighbourhood;
 pub mod precomputed;
 
 pub use emit::{specular_casters, Caster, PhotonTracer};

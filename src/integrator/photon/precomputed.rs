@@ -30,6 +30,8 @@ use super::map::PhotonMap;
 use super::map::{
     build_tree, decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, reorder, to_tree, tree_bytes,
 };
+use super::neighbourhood::NeighbourCache;
+use crate::math::sampling::morton_code;
 use crate::math::Vec3A;
 use rayon::prelude::*;
 use std::num::NonZero;
@@ -119,11 +121,10 @@ struct SiteEntry {
 
 /// The sites' tree and estimates.
 pub(super) struct PrecomputedIrradiance {
+    /// The sites' tree, its points kept: cached neighbourhoods
+    /// ([`SiteCache`]) are re-ranked from them.
     tree: ChunkedTree,
     entries: Vec<SiteEntry>,
-    /// Site positions in tree coordinates, by item: cached candidate sets
-    /// ([`SiteCache`]) are re-ranked from them.
-    positions: Vec<[f32; 3]>,
     /// Square of the factor on a site's radius within which its estimate
     /// is used (see [`reach2`]).
     reach2: f32,
@@ -148,7 +149,7 @@ impl PrecomputedIrradiance {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         let n = self.entries.len();
-        tree_bytes(n) + n * (std::mem::size_of::<SiteEntry>() + std::mem::size_of::<[f32; 3]>())
+        tree_bytes(n) + self.tree.points_bytes() + n * std::mem::size_of::<SiteEntry>()
     }
 
     /// The estimate at `p` (normal `n`): the [`INTERPOLATED_SITES`]
@@ -163,25 +164,28 @@ impl PrecomputedIrradiance {
         if self.entries.is_empty() || !map.near_bounds(p, g.max_radius) {
             return Vec3A::ZERO;
         }
-        let found = self.nearest_sites(&to_tree(&map.rotation, p), g.max_radius, cache);
+        let q = to_tree(&map.rotation, p);
+        let k = NonZero::new(INTERPOLATED_SITES).expect("constant > 0");
+        let found = &mut cache.found;
+        cache.sites.nearest(&self.tree, &q, g.max_radius, k, found);
         // No site within the maximum radius: at most a few unselected
         // photons (fewer than the stride) could be, a negligible term next
         // to the k a full estimate holds.
-        let Some(&(nearest_d2, nearest)) = found.as_slice().first() else {
+        let Some(nearest) = found.first() else {
             return Vec3A::ZERO;
         };
-        let r = self.entries[nearest as usize].radius as f32 / 65535.0 * g.max_radius;
-        if nearest_d2 > self.reach2 * r * r {
+        let r = self.entries[nearest.item as usize].radius as f32 / 65535.0 * g.max_radius;
+        if nearest.distance > self.reach2 * r * r {
             return map.irradiance(p, n, g);
         }
-        let d_max2 = found.farthest2() * 1.0001 + f32::MIN_POSITIVE;
+        let d_max2 = found.last().map_or(0.0, |nb| nb.distance) * 1.0001 + f32::MIN_POSITIVE;
         let (mut sum, mut weights) = (Vec3A::ZERO, 0.0f32);
-        for &(d2, item) in found.as_slice() {
-            let e = self.entries[item as usize];
+        for nb in found.iter() {
+            let e = self.entries[nb.item as usize];
             if decode_octahedral(e.normal).dot(n) < NORMAL_COS {
                 continue;
             }
-            let w = 1.0 - d2 / d_max2;
+            let w = 1.0 - nb.distance / d_max2;
             sum += decode_rgbe(e.rgbe) * w;
             weights += w;
         }
@@ -191,214 +195,33 @@ impl PrecomputedIrradiance {
             map.irradiance(p, n, g)
         }
     }
-
-    /// The [`INTERPOLATED_SITES`] nearest sites to `q` (tree coordinates)
-    /// within `max_radius`, nearest first, ties by item: exactly, whatever
-    /// `cache` holds.
-    ///
-    /// A cache entry holds every site within `R` of a centre `c`. For a
-    /// query at distance `d` from `c`, every site within `R − d` of the
-    /// query is in the entry (triangle inequality), so if the `n` nearest
-    /// among the entry's sites reach only `ρ ≤ R − d` (or, with fewer than
-    /// `n` within `max_radius`, `ρ = max_radius`), no site outside the entry
-    /// can be nearer: the answer is exact. The samples of one pixel land
-    /// within a fraction of a site spacing of each other, so most queries
-    /// re-rank about 20 cached sites instead of walking the tree. A miss
-    /// caches every site within [`SEARCH_FACTOR`] times the reach of the
-    /// nearest entry's answer, a guess of this one's, and keeps it when
-    /// exact; else it asks the tree for the answer's reach first.
-    fn nearest_sites(&self, q: &[f32; 3], max_radius: f32, cache: &mut SiteCache) -> NearestSites {
-        let max_r2 = max_radius * max_radius;
-        // The entry whose ball reaches farthest beyond q: the one most
-        // likely to answer exactly.
-        let best = cache
-            .entries
-            .iter()
-            .enumerate()
-            .map(|(i, e)| (i, e.radius - distance2(q, &e.center).sqrt()))
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        let mut guess = None;
-        if let Some((i, slack)) = best {
-            let e = &cache.entries[i];
-            if slack > 0.0 {
-                let found = rank(q, &e.sites, max_r2);
-                if found.reach(max_radius) <= slack - e.radius * CACHE_MARGIN {
-                    cache.hits += 1;
-                    return found;
-                }
-            }
-            // The nearby entry's reach: a guess of this answer's.
-            guess = Some(e.reach);
-        }
-        cache.misses += 1;
-        let slot = if cache.entries.len() < CACHE_ENTRIES {
-            cache.entries.push(CachedSites::default());
-            cache.entries.len() - 1
-        } else {
-            let slot = cache.next;
-            cache.next = (cache.next + 1) % CACHE_ENTRIES;
-            slot
-        };
-        // A radius search around the guess; exact when the answer reaches
-        // less far than the searched radius, else the answer's reach comes
-        // from the tree's k-nearest search and the radius follows from it.
-        if let Some(reach) = guess {
-            if let Some(found) = self.fill(
-                &mut cache.entries[slot],
-                q,
-                reach * SEARCH_FACTOR,
-                max_radius,
-                &mut cache.scratch,
-            ) {
-                return found;
-            }
-        }
-        let near = self
-            .tree
-            .nearest_n_within(q, max_r2, NonZero::new(INTERPOLATED_SITES).expect("constant > 0"));
-        let reach = if near.len() == INTERPOLATED_SITES {
-            near.iter().fold(0.0f32, |m, nb| m.max(nb.distance)).sqrt()
-        } else {
-            max_radius
-        };
-        self.fill(
-            &mut cache.entries[slot],
-            q,
-            reach * SEARCH_FACTOR,
-            max_radius,
-            &mut cache.scratch,
-        )
-        .expect("a radius beyond the answer's reach is exact")
-    }
-
-    /// Makes `entry` every site within `radius` of `q` and returns the
-    /// answer at `q` if it is exact (reaches less far than `radius`).
-    /// The tree is searched a little wider than `radius`: its distances and
-    /// ours may differ by rounding.
-    fn fill(
-        &self,
-        entry: &mut CachedSites,
-        q: &[f32; 3],
-        radius: f32,
-        max_radius: f32,
-        scratch: &mut Vec<Neighbour>,
-    ) -> Option<NearestSites> {
-        let searched = radius * (1.0 + CACHE_MARGIN);
-        self.tree.within(q, searched * searched, scratch);
-        entry.center = *q;
-        entry.radius = radius;
-        entry.sites.clear();
-        entry
-            .sites
-            .extend(scratch.iter().map(|nb| (self.positions[nb.item as usize], nb.item)));
-        let found = rank(q, &entry.sites, max_radius * max_radius);
-        entry.reach = found.reach(max_radius);
-        (entry.reach <= radius * (1.0 - CACHE_MARGIN)).then_some(found)
-    }
 }
 
-/// The [`INTERPOLATED_SITES`] nearest of `sites` (position, item) to `q`
-/// within squared distance `max_r2`, by (squared distance, item).
-#[inline]
-fn rank(q: &[f32; 3], sites: &[([f32; 3], u32)], max_r2: f32) -> NearestSites {
-    let mut found = NearestSites::default();
-    for (p, item) in sites {
-        let d2 = distance2(q, p);
-        if d2 <= max_r2 {
-            found.insert(d2, *item);
-        }
-    }
-    found
-}
-
-/// Squared Euclidean distance (kiddo's `SquaredEuclidean`, same order of operations).
-#[inline]
-fn distance2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-}
-
-/// Relative margin of the cache's exactness test, far above the rounding
-/// of the distances it compares.
-const CACHE_MARGIN: f32 = 1e-4;
-
-/// A missed search caches every site within this factor of the answer's
+/// A site search caches every site within this factor of its answer's
 /// reach: the entry then answers queries up to `(F − 1)·reach` away (with
-/// 1.6, about 20 sites, enough for the next samples of the pixel).
-const SEARCH_FACTOR: f32 = 1.6;
+/// 1.6, about 20 sites, enough for the next samples of a pixel).
+const SITE_SEARCH_FACTOR: f32 = 1.6;
 
-/// Entries a [`SiteCache`] keeps (a sample's path meets diffuse surfaces at
-/// its camera hit and again after specular bounces).
-const CACHE_ENTRIES: usize = 4;
-
-/// Every site within `radius` of `center` (tree coordinates), with its
-/// position (copied: re-ranking reads one contiguous block), and how far
-/// the answer at `center` reached.
-#[derive(Clone, Debug, Default)]
-struct CachedSites {
-    center: [f32; 3],
-    radius: f32,
-    reach: f32,
-    sites: Vec<([f32; 3], u32)>,
-}
+/// Neighbourhoods a [`SiteCache`] keeps (a sample's path meets diffuse
+/// surfaces at its camera hit and again after specular bounces).
+const SITE_CACHE_ENTRIES: usize = 4;
 
 /// Recent site searches of one rendering thread, reused by nearby lookups
-/// ([`PhotonMap::caustic_irradiance_cached`]). It changes only how fast a
+/// ([`PhotonMap::caustic_irradiance_cached`]; see
+/// [`neighbourhood`](super::neighbourhood)). It changes only how fast a
 /// lookup is, never its result, so it may be shared by any sequence of
 /// lookups (a tile, a pixel) without affecting determinism.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct SiteCache {
-    entries: Vec<CachedSites>,
-    next: usize,
-    scratch: Vec<Neighbour>,
-    /// Searches answered from an entry, and by the tree.
-    hits: u64,
-    misses: u64,
+    sites: NeighbourCache,
+    found: Vec<Neighbour>,
 }
 
-/// Up to [`INTERPOLATED_SITES`] `(squared distance, item)`, sorted.
-#[derive(Clone, Copy, Debug, Default)]
-struct NearestSites {
-    sites: [(f32, u32); INTERPOLATED_SITES],
-    len: usize,
-}
-
-impl NearestSites {
-    #[inline]
-    fn insert(&mut self, d2: f32, item: u32) {
-        let key = (d2, item);
-        let before = |a: (f32, u32), b: (f32, u32)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1);
-        if self.len == INTERPOLATED_SITES {
-            if !before(key, self.sites[self.len - 1]) {
-                return;
-            }
-            self.len -= 1;
-        }
-        let mut i = self.len;
-        while i > 0 && before(key, self.sites[i - 1]) {
-            self.sites[i] = self.sites[i - 1];
-            i -= 1;
-        }
-        self.sites[i] = key;
-        self.len += 1;
-    }
-
-    fn as_slice(&self) -> &[(f32, u32)] {
-        &self.sites[..self.len]
-    }
-
-    /// Squared distance of the farthest (0 when empty).
-    fn farthest2(&self) -> f32 {
-        self.as_slice().last().map_or(0.0, |s| s.0)
-    }
-
-    /// How far the answer reaches: the farthest site's distance when full,
-    /// else the whole `max_radius` (every site within it counted).
-    fn reach(&self, max_radius: f32) -> f32 {
-        if self.len == INTERPOLATED_SITES {
-            self.farthest2().sqrt()
-        } else {
-            max_radius
+impl Default for SiteCache {
+    fn default() -> Self {
+        Self {
+            sites: NeighbourCache::new(SITE_CACHE_ENTRIES, SITE_SEARCH_FACTOR),
+            found: Vec::with_capacity(4 * INTERPOLATED_SITES),
         }
     }
 }
@@ -409,6 +232,22 @@ impl PhotonMap {
     /// [`PhotonMap::caustic_irradiance`] uses them from now on.
     pub fn precompute_irradiance(&mut self, sites: Vec<IrradianceSite>, g: &GatherParams) {
         assert!(sites.len() <= u32::MAX as usize, "too many sites for u32 indices");
+        let rotation = self.rotation;
+        // Sites in Z-order over the map's bounds: consecutive gathers (one
+        // task's) then lie side by side and walk the same parts of the
+        // tree; emission order is coherent in direction space only, and
+        // consecutive sites lay metres apart (Z-order: 35% faster).
+        let bounds = self.bounds();
+        let top = (1u32 << 21) as f32 - 1.0;
+        let scale = Vec3A::splat(top) / bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE));
+        let mut sites = sites;
+        sites.par_sort_by_cached_key(|s| {
+            let c = ((s.position - bounds.min) * scale).clamp(Vec3A::ZERO, Vec3A::splat(top));
+            (
+                morton_code([c.x as u32, c.y as u32, c.z as u32]),
+                s.position.to_array().map(f32::to_bits),
+            )
+        });
         let entries: Vec<SiteEntry> = sites
             .par_iter()
             .map(|s| {
@@ -421,19 +260,12 @@ impl PhotonMap {
                 }
             })
             .collect();
-        let rotation = self.rotation;
         let positions: Vec<[f32; 3]> = sites.par_iter().map(|s| to_tree(&rotation, s.position)).collect();
         drop(sites);
-        let (tree, order) = build_tree(positions.clone());
+        let (tree, order) = build_tree(positions, true);
         let entries = reorder(entries, &order);
-        let positions = reorder(positions, &order);
         let reach2 = reach2(self.len() as f32 / entries.len().max(1) as f32, g.k.get());
-        self.precomputed = Some(PrecomputedIrradiance {
-            tree,
-            entries,
-            positions,
-            reach2,
-        });
+        self.precomputed = Some(PrecomputedIrradiance { tree, entries, reach2 });
     }
 
     /// Number of precomputed sites (0 when none were computed).
@@ -535,13 +367,12 @@ mod tests {
                 "at {p}"
             );
         }
-        assert!(cache.entries.len() == CACHE_ENTRIES, "the walk filled the cache");
         // Steps of 2 mm against sites about 1 cm apart: most searches hit.
         assert!(
-            cache.hits > 4 * cache.misses,
+            cache.sites.hits > 4 * cache.sites.misses,
             "{} hits, {} misses",
-            cache.hits,
-            cache.misses
+            cache.sites.hits,
+            cache.sites.misses
         );
     }
 
