@@ -62,26 +62,13 @@ impl NeighbourCache {
     }
 
     /// The `k` nearest points of `tree` (its points kept) to `q` within
-    /// `max_radius`, into `out` nearest first: exactly, whatever
+    /// `max_radius`, into `out` nearest first (sorted, so that sums over the
+    /// answer never depend on the cache): exactly, whatever
     /// the cache holds (ties at the k-th distance broken by item). A miss
     /// first searches within `factor` times the reach of the nearest
     /// entry's answer, a guess of this one's, and keeps it when exact; else
     /// it asks the tree for the answer's reach.
     pub fn nearest(
-        &mut self,
-        tree: &ChunkedTree,
-        q: &[f32; 3],
-        max_radius: f32,
-        k: NonZero<usize>,
-        out: &mut Vec<Neighbour>,
-    ) {
-        self.search(tree, q, max_radius, k, out);
-        // Sorted, so that sums over the answer do not depend on the order
-        // the cached points happened to be in.
-        out.sort_unstable_by(by_distance_then_item);
-    }
-
-    fn search(
         &mut self,
         tree: &ChunkedTree,
         q: &[f32; 3],
@@ -153,30 +140,57 @@ fn fill(
     entry.reach <= radius * (1.0 - MARGIN)
 }
 
-/// The `k` nearest of `points` to `q` within `max_radius` into `out` (by
-/// squared distance, then item), and how far the answer reaches: the k-th
-/// distance when `k` were found, else `max_radius` (all within it counted).
+/// The `k` nearest of `points` to `q` within `max_radius` into `out`,
+/// sorted by squared distance, then item, and how far the answer reaches:
+/// the k-th distance when `k` were found, else `max_radius` (all within it
+/// counted).
 #[inline]
 fn rank(q: &[f32; 3], points: &[([f32; 3], u32)], max_radius: f32, k: NonZero<usize>, out: &mut Vec<Neighbour>) -> f32 {
     let max_r2 = max_radius * max_radius;
-    out.clear();
-    out.extend(points.iter().filter_map(|(p, item)| {
-        let d2 = distance2(q, p);
-        (d2 <= max_r2).then_some(Neighbour {
-            distance: d2,
-            item: *item,
-        })
-    }));
     let k = k.get();
+    out.clear();
+    if k <= SMALL_K {
+        // Insertion into a short sorted list: no allocation, no sort.
+        for (p, item) in points {
+            let d2 = distance2(q, p);
+            if d2 > max_r2 {
+                continue;
+            }
+            let nb = Neighbour {
+                distance: d2,
+                item: *item,
+            };
+            if out.len() == k {
+                if by_distance_then_item(&nb, &out[k - 1]).is_ge() {
+                    continue;
+                }
+                out.pop();
+            }
+            let at = out.partition_point(|o| by_distance_then_item(o, &nb).is_lt());
+            out.insert(at, nb);
+        }
+    } else {
+        out.extend(points.iter().filter_map(|(p, item)| {
+            let d2 = distance2(q, p);
+            (d2 <= max_r2).then_some(Neighbour {
+                distance: d2,
+                item: *item,
+            })
+        }));
+        if out.len() > k {
+            out.select_nth_unstable_by(k - 1, by_distance_then_item);
+            out.truncate(k);
+        }
+        out.sort_unstable_by(by_distance_then_item);
+    }
     if out.len() < k {
         return max_radius;
     }
-    if out.len() > k {
-        out.select_nth_unstable_by(k - 1, by_distance_then_item);
-        out.truncate(k);
-    }
-    out.iter().fold(0.0f32, |m, nb| m.max(nb.distance)).sqrt()
+    out.last().map_or(max_radius, |nb| nb.distance.sqrt())
 }
+
+/// Up to this `k`, answers are ranked by insertion into a sorted list.
+const SMALL_K: usize = 16;
 
 /// The total order of answers: squared distance, then item.
 #[inline]
