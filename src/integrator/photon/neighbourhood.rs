@@ -137,8 +137,27 @@ fn fill(
     entry.center = *q;
     entry.radius = radius;
     entry.reach = rank(q, &entry.points, max_radius, k, out);
-    entry.reach <= radius * (1.0 - MARGIN)
+    let exact = entry.reach <= radius * (1.0 - MARGIN);
+    // Beside a dense region (a caustic's edge, where fewer than k points
+    // lie within the maximum radius) the ball can hold thousands of points,
+    // and every later query would rank them all: keep the nearest
+    // `CAP_PER_K·k` only, and shrink the radius to what they cover (every
+    // point strictly nearer than the first one dropped). `out` was ranked
+    // from all of them.
+    let cap = CAP_PER_K * k.get();
+    if entry.points.len() > cap {
+        let d2 = |p: &[f32; 3]| distance2(q, p);
+        entry
+            .points
+            .select_nth_unstable_by(cap, |a, b| d2(&a.0).total_cmp(&d2(&b.0)));
+        entry.radius = d2(&entry.points[cap].0).sqrt() * (1.0 - MARGIN);
+        entry.points.truncate(cap);
+    }
+    exact
 }
+
+/// A cached neighbourhood keeps at most this many points per answer point.
+const CAP_PER_K: usize = 6;
 
 /// The `k` nearest of `points` to `q` within `max_radius` into `out`,
 /// sorted by squared distance, then item, and how far the answer reaches:
