@@ -1,6 +1,7 @@
 //! Ray–triangle tests: watertight (default) and Möller–Trumbore.
 
 use crate::math::{Ray, Vec3A};
+use glam::Vec4;
 
 /// Per-ray constants of the watertight test (Woop, Benthin, Wald 2013,
 /// "Watertight Ray/Triangle Intersection", JCGT 2(1)): the ray is sheared so
@@ -46,10 +47,12 @@ impl WatertightRay {
     /// `(t, u, v)` with `0 < t < t_max`, `u`, `v` the weights of `p1`, `p2`.
     #[inline]
     pub fn intersect(&self, p0: Vec3A, p1: Vec3A, p2: Vec3A, t_max: f32) -> Option<(f32, f32, f32)> {
-        let [kx, ky, kz] = self.k;
-        let a = p0 - self.origin;
-        let b = p1 - self.origin;
-        let c = p2 - self.origin;
+        // The permuted coordinates are read from 4-lane arrays with the axis
+        // masked to 0..=3: no bounds checks, no per-lane `match` (glam's
+        // `Vec3A` index), the same values.
+        let [kx, ky, kz] = self.k.map(|k| k & 3);
+        let lanes = |v: Vec3A| Vec4::from((v - self.origin, 0.0)).to_array();
+        let (a, b, c) = (lanes(p0), lanes(p1), lanes(p2));
         let (sx, sy, sz) = (self.shear.x, self.shear.y, self.shear.z);
         let ax = a[kx] - sx * a[kz];
         let ay = a[ky] - sy * a[kz];

@@ -1,6 +1,7 @@
 //! Compact KD-tree nodes and the single-tree traversal shared by both levels.
 
 use crate::math::{gamma, Aabb, Ray, Vec3A};
+use glam::Vec4;
 use std::ops::Range;
 
 /// Low two bits of `KdNode::flags` for a leaf (0, 1, 2 are split axes).
@@ -10,8 +11,11 @@ const LEAF: u32 = 3;
 pub(crate) const MAX_INDEX: usize = (1 << 30) - 1;
 
 /// Entries of the traversal stack. The build caps the depth below this
-/// (`MAX_TREE_DEPTH`): each level pushes at most one far child.
+/// (`MAX_TREE_DEPTH`): each level pushes at most one far child. A power of
+/// two: the traversal indexes it modulo its size (no bounds check; the
+/// depth cap keeps the index below it).
 const STACK_SIZE: usize = 64;
+const _: () = assert!(STACK_SIZE.is_power_of_two() && MAX_TREE_DEPTH < STACK_SIZE as u32);
 
 /// Deepest level the builder may create (keeps the traversal stack bounded).
 pub(crate) const MAX_TREE_DEPTH: u32 = 60;
@@ -158,14 +162,16 @@ impl KdTree {
         let distance = (ray.origin - self.bounds.center()).abs().max_element();
         let tol = SLACK_ULPS * f32::EPSILON * (distance + size);
         let slack_t = tol / ray.dir.abs().max_element();
-        let axis_slack = (inv_dir.abs() * tol + Vec3A::splat(slack_t)).to_array();
+        let axis_slack = Vec4::from((inv_dir.abs() * tol + Vec3A::splat(slack_t), 0.0)).to_array();
         let root = Aabb::new(self.bounds.min - Vec3A::splat(tol), self.bounds.max + Vec3A::splat(tol));
         let Some((t0, t1)) = root.intersect_interval(ray, inv_dir, t_max + slack_t) else {
             return;
         };
-        let origin = ray.origin.to_array();
-        let dir = ray.dir.to_array();
-        let inv = inv_dir.to_array();
+        // Four lanes, so that indexing by a node's 2-bit axis field needs no
+        // bounds check (the fourth lane is never read for an interior node).
+        let origin = Vec4::from((ray.origin, 0.0)).to_array();
+        let dir = Vec4::from((ray.dir, 0.0)).to_array();
+        let inv = Vec4::from((inv_dir, 0.0)).to_array();
 
         let mut stack = [(0u32, 0f32, 0f32); STACK_SIZE];
         let mut top = 0usize;
@@ -187,7 +193,7 @@ impl KdTree {
                         } else if origin[axis] > split + tol {
                             node_index = above;
                         } else {
-                            stack[top] = (above as u32, t_min, t_max);
+                            stack[top % STACK_SIZE] = (above as u32, t_min, t_max);
                             top += 1;
                             node_index = below;
                         }
@@ -201,13 +207,16 @@ impl KdTree {
                         (above, below)
                     };
                     let slack = axis_slack[axis];
-                    let first_end = t_max.min(t_split + slack);
-                    let second_start = t_min.max(t_split - slack);
+                    // Plain comparisons, not f32::min/max (whose NaN rules cost
+                    // several instructions): no operand is NaN here (finite
+                    // ray, non-zero direction component, finite slack).
+                    let first_end = min_f32(t_max, t_split + slack);
+                    let second_start = max_f32(t_min, t_split - slack);
                     let visit_first = t_min <= first_end;
                     let visit_second = second_start <= t_max;
                     match (visit_first, visit_second) {
                         (true, true) => {
-                            stack[top] = (second as u32, second_start, t_max);
+                            stack[top % STACK_SIZE] = (second as u32, second_start, t_max);
                             top += 1;
                             node_index = first;
                             t_max = first_end;
@@ -240,7 +249,7 @@ impl KdTree {
                 return;
             }
             top -= 1;
-            let (n, a, b) = stack[top];
+            let (n, a, b) = stack[top % STACK_SIZE];
             node_index = n as usize;
             t_min = a;
             t_max = b;
@@ -294,6 +303,26 @@ impl KdTree {
             }
         }
         shape
+    }
+}
+
+/// The smaller of two non-NaN values (one `minss`).
+#[inline(always)]
+fn min_f32(a: f32, b: f32) -> f32 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
+/// The larger of two non-NaN values (one `maxss`).
+#[inline(always)]
+fn max_f32(a: f32, b: f32) -> f32 {
+    if b > a {
+        b
+    } else {
+        a
     }
 }
 
