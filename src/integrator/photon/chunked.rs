@@ -84,7 +84,7 @@ impl ChunkedTree {
     /// bytes each) for [`within_points`](Self::within_points).
     pub fn build(points: Vec<[f32; 3]>, depth: u32, keep_points: bool) -> (Self, Vec<u32>) {
         assert!(points.len() <= u32::MAX as usize, "too many points for u32 indices");
-        let all: Vec<u32> = (0..points.len() as u32).collect();
+        let all: Vec<u32> = (0..points.len() as u32).into_par_iter().collect();
         let parts = cut(&points, all, depth);
         let mut offsets = Vec::with_capacity(parts.len());
         let mut total = 0usize;
@@ -97,21 +97,28 @@ impl ChunkedTree {
             .map(|idx| idx.iter().map(|&i| points[i as usize]).collect())
             .collect();
         drop(points);
-        let chunks = slices
-            .into_par_iter()
-            .zip(offsets.par_iter())
-            .map(|(points, &offset)| {
-                let (min, max) = bounds(&points);
-                Chunk {
-                    min,
-                    max,
-                    tree: PhotonTree::new_from_slice(&points),
-                    offset,
-                    points: if keep_points { points } else { Vec::new() },
-                }
-            })
-            .collect();
-        (Self { chunks }, parts.concat())
+        // The order (a serial copy of 4 bytes per point) is concatenated
+        // while the trees build.
+        let (chunks, order) = rayon::join(
+            || {
+                slices
+                    .into_par_iter()
+                    .zip(offsets.par_iter())
+                    .map(|(points, &offset)| {
+                        let (min, max) = bounds(&points);
+                        Chunk {
+                            min,
+                            max,
+                            tree: PhotonTree::new_from_slice(&points),
+                            offset,
+                            points: if keep_points { points } else { Vec::new() },
+                        }
+                    })
+                    .collect()
+            },
+            || parts.concat(),
+        );
+        (Self { chunks }, order)
     }
 
     /// Bytes held by the kept copies of the points.
@@ -243,16 +250,24 @@ fn cut(points: &[[f32; 3]], idx: Vec<u32>, depth: u32) -> Vec<Vec<u32>> {
         .map(|block| block.iter().partition(|&&i| less(key(i), pivot).is_lt()))
         .collect();
     drop(idx);
-    let mut below = Vec::with_capacity(blocks.iter().map(|b| b.0.len()).sum());
-    let mut above = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
-    for (b, a) in &blocks {
-        below.extend_from_slice(b);
-        above.extend_from_slice(a);
-    }
+    // The two halves are concatenated side by side (serial copies).
+    let (below, above) = rayon::join(
+        || concat(blocks.iter().map(|(b, _)| b)),
+        || concat(blocks.iter().map(|(_, a)| a)),
+    );
     drop(blocks);
     let (mut a, b) = rayon::join(|| cut(points, below, depth - 1), || cut(points, above, depth - 1));
     a.extend(b);
     a
+}
+
+/// `parts` one after the other, allocated once.
+fn concat<'a>(parts: impl Iterator<Item = &'a Vec<u32>> + Clone) -> Vec<u32> {
+    let mut out = Vec::with_capacity(parts.clone().map(Vec::len).sum());
+    for p in parts {
+        out.extend_from_slice(p);
+    }
+    out
 }
 
 type Bounds = ([f32; 3], [f32; 3]);

@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 /// Photons traced per rayon task: large enough to amortise scheduling.
 const CHUNK: u64 = 4096;
 /// Photons traced before their results are copied into the final arrays:
-/// bounds the transient memory of the per-chunk vectors.
+/// bounds the transient memory of the per-chunk vectors (two batches' worth).
 const BATCH: u64 = 1 << 20;
 
 /// What one rayon task of the photon pass produced, already packed.
@@ -126,13 +126,14 @@ pub fn photon_pass_with(
     let mut records: Vec<PhotonRecord> = Vec::new();
     let mut sites: Vec<IrradianceSite> = Vec::new();
     let mut rays = 0u64;
-    let mut batch_start = 0u64;
-    while batch_start < count {
+    // Tracing and packing run in parallel; the copies of one batch into the
+    // final arrays (memcpy of 20 bytes per photon, and the page faults of
+    // the arrays' growth) run on one thread while the next batch is traced,
+    // so no core waits for them. Batches are appended in emission order.
+    let trace_batch = |batch_start: u64| -> Vec<TracedChunk> {
         let batch_end = (batch_start + BATCH).min(count);
         let chunks = (batch_end - batch_start).div_ceil(CHUNK);
-        // Tracing and packing both run in parallel; only the copies into
-        // the final arrays are serial (memcpy of 20 bytes per photon).
-        let results: Vec<TracedChunk> = (0..chunks)
+        (0..chunks)
             .into_par_iter()
             .map(|c| {
                 let first = batch_start + c * CHUNK;
@@ -156,15 +157,25 @@ pub fn photon_pass_with(
                 }
                 out
             })
-            .collect();
+            .collect()
+    };
+    let mut append = |results: Vec<TracedChunk>| {
         for chunk in results {
             rays += chunk.rays;
             positions.extend_from_slice(&chunk.positions);
             records.extend_from_slice(&chunk.records);
             sites.extend_from_slice(&chunk.sites);
         }
-        batch_start = batch_end;
+    };
+    let mut pending: Vec<TracedChunk> = Vec::new();
+    let mut batch_start = 0u64;
+    while batch_start < count {
+        let previous = std::mem::take(&mut pending);
+        let (traced, ()) = rayon::join(|| trace_batch(batch_start), || append(previous));
+        pending = traced;
+        batch_start = (batch_start + BATCH).min(count);
     }
+    append(pending);
     positions.shrink_to_fit();
     records.shrink_to_fit();
     let trace_time = start.elapsed();
