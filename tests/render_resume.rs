@@ -6,9 +6,9 @@
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::photon::{PhotonMap, SiteCache};
+use caustic::integrator::render::PixelStrata;
 use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
 use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
-use caustic::math::rng::Domain;
 use caustic::math::sampling::{grid_for, stratified};
 use caustic::math::{Rng, Vec2, Vec3, Vec3A};
 use caustic::scene::{load_scene, Scene};
@@ -203,11 +203,7 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
     for y in 0..plan.height {
         for x in 0..plan.width {
             let pixel = y as u64 * plan.width as u64 + x as u64;
-            let rotation = if plan.spread() {
-                Rng::new(plan.seed, Domain::Pixel, pixel, u64::MAX).below(spp)
-            } else {
-                0
-            };
+            let strata = PixelStrata::new(plan, plan.seed, pixel);
             let (mut sum, mut kept) = (Vec3A::ZERO, 0u32);
             for k in 0..spp {
                 let mut rng = Rng::for_pixel(plan.seed, pixel, k as u64);
@@ -218,7 +214,8 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
                     .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 let mut ctx = SampleContext {
                     rng,
-                    slot: (k + rotation) % spp,
+                    slot: strata.slot(k),
+                    fresnel_stratum: strata.fresnel_stratum(k),
                     counts: &mut counts,
                     sites: &mut SiteCache::default(),
                 };

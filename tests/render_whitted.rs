@@ -203,7 +203,15 @@ fn a_glass_sphere_refracts_and_is_not_black_at_its_centre() {
     // incidence: about (1 − 0.04)² of the wall behind.
     let to = light - Vec3A::new(0.0, 0.0, -5.0);
     let wall = 0.8 / PI * 20.0 * (to.z / to.length()) / to.length_squared();
-    let c = out.film.get(16, 16);
+    // The mean of the 3×3 central pixels (36 samples): at 4 spp one pixel
+    // alone is at the mercy of its samples' Fresnel choices (a sample that
+    // reflects at either interface sees black: 1 or 2 of 4 often do).
+    let mut c = Vec3::ZERO;
+    for y in 15..18 {
+        for x in 15..18 {
+            c += out.film.get(x, y) / 9.0;
+        }
+    }
     assert!(c.x > 0.6 * wall && c.x < 1.05 * wall, "centre {c}, wall {wall}");
     // The rim reflects at grazing angles and is not empty either; and the
     // glass really is what makes the centre bright: no bounces → black.

@@ -348,7 +348,7 @@ impl fmt::Display for RenderPlan {
             Sharing::Spread => writeln!(
                 f,
                 "  sample spreading: ran (area-light strata shared out over the pixel's samples; \
-                 one Fresnel-weighted branch per sample at dielectrics)"
+                 one Fresnel-weighted branch per sample at dielectrics, the first stratified over the pixel)"
             ),
             Sharing::SplitRequested => writeln!(
                 f,

@@ -465,15 +465,7 @@ fn render_tile_pass(
                 continue;
             }
             let pixel = y as u64 * plan.width as u64 + x as u64;
-            // Spread sampling: sample k takes the strata share
-            // (k + rotation) mod spp. The per-pixel random rotation decouples
-            // the share from the sub-pixel stratum k, so each sub-pixel
-            // position sees every share equally often in expectation.
-            let rotation = if plan.spread() {
-                Rng::new(seed, Domain::Pixel, pixel, u64::MAX).below(spp)
-            } else {
-                0
-            };
+            let strata = PixelStrata::new(plan, seed, pixel);
             // Continue the f32 running sum exactly where it stopped.
             let mut sum = Vec3A::from(state.sum[i]);
             let mut kept = state.kept[i];
@@ -486,7 +478,8 @@ fn render_tile_pass(
                 out.rays.camera += 1;
                 let mut ctx = SampleContext {
                     rng,
-                    slot: (k + rotation) % spp,
+                    slot: strata.slot(k),
+                    fresnel_stratum: strata.fresnel_stratum(k),
                     counts: &mut out.rays,
                     sites: &mut sites,
                 };
@@ -514,8 +507,129 @@ fn render_tile_pass(
 /// magnitude below it (≈ 7.9e28), so ordinary images do not change by a bit.
 pub const SAMPLE_RADIANCE_LIMIT: f32 = f32::MAX / 4_294_967_296.0;
 
+/// The per-pixel assignments of spread sampling, shared by a pixel's samples
+/// (identical however the samples are split into passes).
+///
+/// * Sample `k` takes the area lights' strata share `(k + rotation) mod spp`:
+///   the per-pixel random rotation decouples the share from the sub-pixel
+///   stratum `k`, so each sub-pixel position sees every share equally often
+///   in expectation.
+/// * Its first Fresnel choice takes the stratum `(a·k + b) mod spp`, with
+///   `a` coprime to `spp` and `b` random: a permutation of the samples,
+///   independent of the strata share, whose stratum is uniform for every
+///   sample (so each choice keeps its probability R: unbiased).
+#[derive(Clone, Copy, Debug)]
+pub struct PixelStrata {
+    spp: u32,
+    rotation: u32,
+    fresnel_mul: u32,
+    fresnel_add: u32,
+    spread: bool,
+}
+
+impl PixelStrata {
+    /// The assignments of pixel `pixel` (index `y·width + x`) under `seed`.
+    pub fn new(plan: &RenderPlan, seed: u64, pixel: u64) -> Self {
+        Self::with(plan.spp, plan.spread(), seed, pixel)
+    }
+
+    fn with(spp: u32, spread: bool, seed: u64, pixel: u64) -> Self {
+        let spp = spp.max(1);
+        if !spread {
+            return Self {
+                spp,
+                rotation: 0,
+                fresnel_mul: 1,
+                fresnel_add: 0,
+                spread: false,
+            };
+        }
+        let mut rng = Rng::new(seed, Domain::Pixel, pixel, u64::MAX);
+        let rotation = rng.below(spp);
+        let fresnel_add = rng.below(spp);
+        // A multiplier coprime to spp (1 when none is drawn in a few tries).
+        let fresnel_mul = (0..4)
+            .map(|_| rng.below(spp))
+            .find(|&a| a > 0 && gcd(a, spp) == 1)
+            .unwrap_or(1);
+        Self {
+            spp,
+            rotation,
+            fresnel_mul,
+            fresnel_add,
+            spread: true,
+        }
+    }
+
+    /// The strata share of sample `k` (0 when not spreading).
+    pub fn slot(&self, k: u32) -> u32 {
+        ((k as u64 + self.rotation as u64) % self.spp as u64) as u32
+    }
+
+    /// The stratum of sample `k`'s first Fresnel choice (`None` when not spreading).
+    pub fn fresnel_stratum(&self, k: u32) -> Option<u32> {
+        self.spread
+            .then(|| ((self.fresnel_mul as u64 * k as u64 + self.fresnel_add as u64) % self.spp as u64) as u32)
+    }
+}
+
+/// Greatest common divisor (Euclid).
+fn gcd(mut a: u32, mut b: u32) -> u32 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn pixel_strata_permute_the_samples() {
+        for spp in [1u32, 2, 7, 16, 20, 64] {
+            for pixel in 0..50u64 {
+                let strata = PixelStrata::with(spp, true, 3, pixel);
+                let mut slots: Vec<u32> = (0..spp).map(|k| strata.slot(k)).collect();
+                let mut fresnel: Vec<u32> = (0..spp).map(|k| strata.fresnel_stratum(k).unwrap()).collect();
+                slots.sort_unstable();
+                fresnel.sort_unstable();
+                let all: Vec<u32> = (0..spp).collect();
+                assert_eq!(slots, all, "spp {spp}, pixel {pixel}");
+                assert_eq!(fresnel, all, "spp {spp}, pixel {pixel}");
+            }
+        }
+        let split = PixelStrata::with(20, false, 3, 9);
+        assert_eq!((split.slot(5), split.fresnel_stratum(5)), (5, None));
+    }
+
+    #[test]
+    fn stratified_fresnel_choice_keeps_its_probability() {
+        // Over many pixels every sample reflects with probability R, and in
+        // each pixel the count of reflections is floor or ceil of R·spp.
+        let (spp, r) = (20u32, 0.13f32);
+        let mut per_sample = vec![0u32; spp as usize];
+        let pixels = 20_000u64;
+        for pixel in 0..pixels {
+            let strata = PixelStrata::with(spp, true, 11, pixel);
+            let mut rng = Rng::new(11, Domain::Analysis, 99, pixel);
+            let mut count = 0;
+            for k in 0..spp {
+                let u = (strata.fresnel_stratum(k).unwrap() as f32 + rng.f32()) / spp as f32;
+                if u < r {
+                    per_sample[k as usize] += 1;
+                    count += 1;
+                }
+            }
+            assert!(count == 2 || count == 3, "pixel {pixel}: {count} reflections");
+        }
+        for (k, &n) in per_sample.iter().enumerate() {
+            let p = n as f64 / pixels as f64;
+            assert!(
+                (p - r as f64).abs() < 0.012,
+                "sample {k}: reflects with probability {p}"
+            );
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -84,6 +84,10 @@ pub struct SampleContext<'c> {
     /// With spread sampling, which share `slot ∈ [0, spp)` of the area
     /// lights' strata this sample takes. Ignored when splitting.
     pub slot: u32,
+    /// With spread sampling, the stratum in `[0, spp)` of the sample's first
+    /// Fresnel choice (reflect or refract at a dielectric); taken by that
+    /// choice, later ones draw from `rng`. `None`: every choice draws.
+    pub fresnel_stratum: Option<u32>,
     /// Ray counters of the current tile.
     pub counts: &'c mut RayCounts,
     /// Recent caustic site searches of the current tile: speeds up the
@@ -389,8 +393,16 @@ impl<'a> Whitted<'a> {
         let r = fresnel_schlick(n1, n2, cos_i, cos_t);
         if self.plan.spread() {
             // One branch, chosen with probability R / (1 − R) and divided by
-            // that probability: R·L_r / R and (1−R)·tint·L_t / (1−R).
-            if ctx.rng.f32() < r {
+            // that probability: R·L_r / R and (1−R)·tint·L_t / (1−R). The
+            // first choice of a sample is stratified over the pixel's
+            // samples (u = (stratum + ξ) / spp), so a pixel reflects in
+            // R·spp of its samples up to one, not a binomial count of them.
+            let xi = ctx.rng.f32();
+            let u = match ctx.fresnel_stratum.take() {
+                Some(stratum) => (stratum as f32 + xi) / self.plan.spp as f32,
+                None => xi,
+            };
+            if u < r {
                 highlight + self.trace_secondary(si, reflected_dir, depth, ctx)
             } else {
                 highlight + d.tint * self.trace_secondary(si, refracted_dir, depth, ctx)
