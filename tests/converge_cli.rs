@@ -162,7 +162,7 @@ fn error_falls_with_budget_and_csv_and_plot_are_written() {
         let (lo, hi) = (&chunk[0], &chunk[2]);
         // MAE, not RMSE or relMSE: those are dominated by a few pixels of
         // the glass ball's small, very bright highlight, where one sample of
-        // 16 reaching the light's reflection (about one pixel in six) sets
+        // 16 reaching the light's reflection (a 0.15 chance per render) sets
         // the pixel to 3.9 against 0.58 and moves RMSE 4× (measured, seed 3).
         // MAE falls 0.24–0.69× here (measured, seeds 3–7; 0.69 at seed 3).
         assert!(hi.mae < 0.8 * lo.mae, "{c}: MAE {} → {}", lo.mae, hi.mae);
