@@ -452,14 +452,26 @@ impl Renderer<'_> {
         }
     }
 
-    fn render(&mut self, accel: &dyn Accel, curve: &CurveSpec, spp: u32, photons: u64) -> Result<Run, ConvergeError> {
+    /// Sets the scene to `curve`'s gather mode, `spp` and `photons`; its plan.
+    fn configure(&mut self, curve: &CurveSpec, spp: u32, photons: u64) -> RenderPlan {
         let s = &mut self.scene.settings;
         s.spp = spp;
         s.photons.count = photons;
         if let Some(g) = curve.gather {
             s.photons.gather = g;
         }
-        let plan = RenderPlan::new(&self.scene);
+        RenderPlan::new(&self.scene)
+    }
+
+    /// One untimed render at 1 spp and at most [`WARM_UP_PHOTONS`] photons.
+    fn warm_up(&mut self, accel: &dyn Accel, curve: &CurveSpec) {
+        let photons = self.default_photons(1).min(WARM_UP_PHOTONS);
+        let plan = self.configure(curve, 1, photons);
+        render::render(&self.scene, accel, &plan, &|_, _| {});
+    }
+
+    fn render(&mut self, accel: &dyn Accel, curve: &CurveSpec, spp: u32, photons: u64) -> Result<Run, ConvergeError> {
+        let plan = self.configure(curve, spp, photons);
         let start = Instant::now();
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         let mut seconds = start.elapsed().as_secs_f64();
@@ -558,8 +570,7 @@ pub fn run(
             .iter()
             .find(|c| c.accel == *kind)
             .expect("built for a curve");
-        let photons = renderer.default_photons(1).min(WARM_UP_PHOTONS);
-        renderer.render(a.as_ref(), curve, 1, photons)?;
+        renderer.warm_up(a.as_ref(), curve);
     }
     let accel_of = |kind: AccelKind| {
         let (_, a, b) = accels.iter().find(|(k, _, _)| *k == kind).expect("built above");

@@ -522,9 +522,8 @@ pub const SAMPLE_RADIANCE_LIMIT: f32 = f32::MAX / 4_294_967_296.0;
 pub struct PixelStrata {
     spp: u32,
     rotation: u32,
-    fresnel_mul: u32,
-    fresnel_add: u32,
-    spread: bool,
+    /// `(a, b)` of the Fresnel permutation; `None` when not spreading.
+    fresnel: Option<(u32, u32)>,
 }
 
 impl PixelStrata {
@@ -539,9 +538,7 @@ impl PixelStrata {
             return Self {
                 spp,
                 rotation: 0,
-                fresnel_mul: 1,
-                fresnel_add: 0,
-                spread: false,
+                fresnel: None,
             };
         }
         let mut rng = Rng::new(seed, Domain::Pixel, pixel, u64::MAX);
@@ -555,9 +552,7 @@ impl PixelStrata {
         Self {
             spp,
             rotation,
-            fresnel_mul,
-            fresnel_add,
-            spread: true,
+            fresnel: Some((fresnel_mul, fresnel_add)),
         }
     }
 
@@ -568,8 +563,8 @@ impl PixelStrata {
 
     /// The stratum of sample `k`'s first Fresnel choice (`None` when not spreading).
     pub fn fresnel_stratum(&self, k: u32) -> Option<u32> {
-        self.spread
-            .then(|| ((self.fresnel_mul as u64 * k as u64 + self.fresnel_add as u64) % self.spp as u64) as u32)
+        self.fresnel
+            .map(|(a, b)| ((a as u64 * k as u64 + b as u64) % self.spp as u64) as u32)
     }
 }
 
@@ -583,6 +578,8 @@ fn gcd(mut a: u32, mut b: u32) -> u32 {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn pixel_strata_permute_the_samples() {
         for spp in [1u32, 2, 7, 16, 20, 64] {
@@ -629,8 +626,6 @@ mod tests {
             );
         }
     }
-
-    use super::*;
 
     #[test]
     fn passes_double_then_step_by_the_cap() {
