@@ -1,13 +1,20 @@
 //! A point set split into spatial chunks, one kiddo immutable k-d tree per
-//! chunk, built in parallel: kiddo builds a tree on one thread (≈ 20 s for
-//! 10M photons here), so large maps are first cut at the median of the
-//! longest axis, recursively ([`chunk_depth`] levels: 4 chunks from 1M
-//! points, 8 from 16M), and the chunks' trees built at once with rayon.
-//! The cut is a fixed function of the points (a sampled median, ties
-//! broken by index), so the structure is identical for any thread count.
+//! chunk, built in parallel. kiddo builds a tree on one thread, and its
+//! build (median selects through an index array, one random read of the
+//! points per comparison) slows down as a tree outgrows the caches: here
+//! 8.9M points took 190 ns each, 277k points about 80 ns. So large maps are cut
+//! into chunks of about [`CHUNK_TARGET`] points, up to 256 chunks, and the
+//! chunks' trees built at once with rayon.
 //!
-//! Queries visit the chunks nearest first and skip those whose bounds lie
-//! beyond the search radius (or the current k-th distance). Items are
+//! The cuts are planned on a fixed sample of the points (every
+//! [`CUT_SAMPLE_STRIDE`]-th): median cuts across the longest axis of each
+//! part of the sample, ties broken by index, down to [`chunk_depth`] levels.
+//! Every point then finds its chunk by walking those cuts, and is scattered
+//! into it by a counting sort. The structure is a fixed function of the
+//! points, identical for any thread count.
+//!
+//! Queries walk the cuts nearest side first and skip the chunks whose bounds
+//! lie beyond the search radius (or the current k-th distance). Items are
 //! indices into the chunks' concatenated order, which [`ChunkedTree::build`]
 //! returns so that callers reorder their per-point payloads alike.
 
@@ -16,18 +23,18 @@ use kiddo::SquaredEuclidean;
 use rayon::prelude::*;
 use std::num::NonZero;
 
-/// Levels of median cuts for `n` points: none below 1M points (one tree
-/// builds fast enough), then 2 (4 chunks), 3 from 16M (8 chunks: more
-/// chunks than cores keeps both cores busy when the chunks' build times
-/// differ).
+/// Points per chunk the cuts aim at: a chunk's build data (source points and
+/// kiddo's index and leaves, ≈ 36 bytes per point) then fits in a few MiB.
+pub const CHUNK_TARGET: usize = 1 << 19;
+
+/// The most cut levels: chunk indices fit in a byte.
+const MAX_DEPTH: u32 = 8;
+
+/// Levels of median cuts for `n` points: the fewest that bring the chunks
+/// down to [`CHUNK_TARGET`] points (none below it; 8, so 256 chunks, from
+/// 67M points up).
 pub fn chunk_depth(n: usize) -> u32 {
-    if n < 1 << 20 {
-        0
-    } else if n < 1 << 24 {
-        2
-    } else {
-        3
-    }
+    n.div_ceil(CHUNK_TARGET).next_power_of_two().ilog2().min(MAX_DEPTH)
 }
 
 /// One chunk: its points' bounds (tree coordinates), its tree, the
@@ -42,7 +49,8 @@ struct Chunk {
 }
 
 impl Chunk {
-    /// Squared distance from `q` to the chunk's bounds.
+    /// Squared distance from `q` to the chunk's bounds (infinite for an
+    /// empty chunk).
     #[inline]
     fn distance2(&self, q: &[f32; 3]) -> f32 {
         q.iter()
@@ -55,8 +63,138 @@ impl Chunk {
     }
 }
 
+/// One cut: points whose key along `axis` is below `key` go below. `at` is
+/// the cut's coordinate, for the plane distance in queries.
+#[derive(Clone, Copy)]
+struct Split {
+    axis: usize,
+    key: u64,
+    at: f32,
+}
+
+/// A cut that sends every point below (where the sample ran out before
+/// `depth` levels): the chunk above stays empty.
+const ALL_BELOW: Split = Split {
+    axis: 0,
+    key: u64::MAX,
+    at: f32::INFINITY,
+};
+
+/// The cuts: a complete binary tree of `depth` levels in heap order (node
+/// `j` has children `2j + 1` below and `2j + 2` above), whose `2^depth`
+/// leaves are the chunks, numbered left to right (below before above):
+/// their concatenation order. Walked without branches when points are
+/// located (8 levels of unpredictable branches took 47 ns per point).
+struct Cuts {
+    depth: u32,
+    splits: Vec<Split>,
+}
+
+impl Cuts {
+    /// Plans `depth` levels of cuts on `sample` (points with their indices).
+    fn plan(sample: &mut [([f32; 3], u32)], depth: u32) -> Self {
+        let mut splits = vec![ALL_BELOW; (1usize << depth) - 1];
+        Self::plan_node(sample, 0, &mut splits);
+        Self { depth, splits }
+    }
+
+    fn plan_node(sample: &mut [([f32; 3], u32)], node: usize, splits: &mut [Split]) {
+        if node >= splits.len() || sample.len() < 2 || sample.len() * CUT_SAMPLE_STRIDE < 2 * BUCKET {
+            return;
+        }
+        let (min, max) = sample.iter().fold(EMPTY_BOUNDS, |b, (p, _)| grow(b, p));
+        let axis = (0..3)
+            .max_by(|&a, &b| (max[a] - min[a]).total_cmp(&(max[b] - min[b])))
+            .unwrap_or(0);
+        let mid = sample.len() / 2;
+        sample.select_nth_unstable_by_key(mid, |(p, i)| key(p, axis, *i));
+        let (p, i) = sample[mid];
+        splits[node] = Split {
+            axis,
+            key: key(&p, axis, i),
+            at: p[axis],
+        };
+        let (below, above) = sample.split_at_mut(mid);
+        Self::plan_node(below, 2 * node + 1, splits);
+        Self::plan_node(above, 2 * node + 2, splits);
+    }
+
+    /// Number of chunks.
+    fn chunk_count(&self) -> usize {
+        1 << self.depth
+    }
+
+    /// The chunks of `points` (whose first index is `first`), into `out`.
+    /// Eight points descend side by side: one point's descent is a chain
+    /// of dependent loads (30 ns for 8 levels), eight overlap.
+    fn locate(&self, points: &[[f32; 3]], first: u32, out: &mut Vec<u8>) {
+        const LANES: usize = 8;
+        let leaves = self.splits.len();
+        for (g, group) in points.chunks(LANES).enumerate() {
+            let base = first + (g * LANES) as u32;
+            let mut node = [0usize; LANES];
+            for _ in 0..self.depth {
+                for (l, p) in group.iter().enumerate() {
+                    let s = self.splits[node[l]];
+                    let above = key(p, s.axis, base + l as u32) >= s.key;
+                    node[l] = 2 * node[l] + 1 + usize::from(above);
+                }
+            }
+            out.extend(node[..group.len()].iter().map(|&j| (j - leaves) as u8));
+        }
+    }
+
+    /// Calls `visit` on each non-empty chunk whose bounds lie within
+    /// squared distance `*reach` of `q`, the near side of each cut first;
+    /// `visit` returns the new reach, so a shrinking k-th distance prunes
+    /// what is left.
+    fn walk<'a>(&self, chunks: &'a [Chunk], q: &[f32; 3], reach: &mut f32, visit: &mut impl FnMut(&'a Chunk) -> f32) {
+        self.walk_node(0, chunks, q, reach, visit);
+    }
+
+    fn walk_node<'a>(
+        &self,
+        node: usize,
+        chunks: &'a [Chunk],
+        q: &[f32; 3],
+        reach: &mut f32,
+        visit: &mut impl FnMut(&'a Chunk) -> f32,
+    ) {
+        let Some(s) = self.splits.get(node) else {
+            let c = &chunks[node - self.splits.len()];
+            if c.tree.size() > 0 && c.distance2(q) <= *reach {
+                *reach = visit(c);
+            }
+            return;
+        };
+        // Points on either side may lie on the plane (ties go by index), so
+        // the plane's distance bounds the far side.
+        let d = q[s.axis] - s.at;
+        let (near, far) = if d < 0.0 {
+            (2 * node + 1, 2 * node + 2)
+        } else {
+            (2 * node + 2, 2 * node + 1)
+        };
+        self.walk_node(near, chunks, q, reach, visit);
+        if d * d <= *reach {
+            self.walk_node(far, chunks, q, reach, visit);
+        }
+    }
+}
+
+/// A point's key along `axis`: its coordinate's bits mapped to an unsigned
+/// integer in the order of `f32::total_cmp`, then its index; a total order
+/// compared without branches.
+#[inline]
+fn key(p: &[f32; 3], axis: usize, i: u32) -> u64 {
+    let bits = p[axis].to_bits();
+    let ordered = bits ^ (((bits as i32 >> 31) as u32) | 0x8000_0000);
+    (u64::from(ordered) << 32) | u64::from(i)
+}
+
 /// Spatially chunked k-d trees (see the module docs).
 pub struct ChunkedTree {
+    cuts: Cuts,
     chunks: Vec<Chunk>,
 }
 
@@ -69,56 +207,114 @@ pub struct Neighbour {
     pub item: u32,
 }
 
+/// One block's part of one chunk: its points and their input indices.
+type Share<'a> = (&'a mut [[f32; 3]], &'a mut [u32]);
+
+/// Points per block of the counting sort's parallel passes.
+const SCATTER_BLOCK: usize = 1 << 16;
+
 impl ChunkedTree {
-    /// Builds the chunks over `points` with `depth` levels of median cuts.
-    /// Returns the tree and `order`: `order[j]` is the index in `points` of
-    /// the point that the tree calls `j`.
+    /// Builds the chunks over `points` with at most `depth` levels of cuts
+    /// (capped at 8). Returns the tree and `order`: `order[j]` is the index
+    /// in `points` of the point that the tree calls `j`.
     ///
-    /// The cuts are stable partitions: each chunk keeps its points in their
-    /// input order. Photons arrive in emission order, which is spatially
-    /// coherent (Morton-ordered strata), and kiddo's build (median selects
-    /// through an index array) runs about three times faster over coherent
-    /// points than over shuffled ones.
+    /// Each chunk keeps its points in their input order. Photons arrive in
+    /// emission order, which is spatially coherent (Morton-ordered strata),
+    /// and kiddo's build runs about three times faster over coherent points
+    /// than over shuffled ones.
     ///
     /// With `keep_points`, each chunk keeps its points in item order (12
     /// bytes each) for [`within_points`](Self::within_points).
     pub fn build(points: Vec<[f32; 3]>, depth: u32, keep_points: bool) -> (Self, Vec<u32>) {
         assert!(points.len() <= u32::MAX as usize, "too many points for u32 indices");
-        let all: Vec<u32> = (0..points.len() as u32).into_par_iter().collect();
-        let parts = cut(&points, all, depth);
-        let mut offsets = Vec::with_capacity(parts.len());
-        let mut total = 0usize;
-        for p in &parts {
-            offsets.push(total as u32);
-            total += p.len();
-        }
-        let slices: Vec<Vec<[f32; 3]>> = parts
-            .par_iter()
-            .map(|idx| idx.iter().map(|&i| points[i as usize]).collect())
+        let n = points.len();
+        let mut sample: Vec<([f32; 3], u32)> = (0..n)
+            .step_by(CUT_SAMPLE_STRIDE)
+            .map(|i| (points[i], i as u32))
             .collect();
+        let cuts = Cuts::plan(&mut sample, depth.min(MAX_DEPTH));
+        drop(sample);
+        let chunk_count = cuts.chunk_count();
+
+        // Counting sort: each block's chunk of every point and its counts...
+        let (labels, counts): (Vec<Vec<u8>>, Vec<Vec<usize>>) = (0..n.div_ceil(SCATTER_BLOCK))
+            .into_par_iter()
+            .map(|b| {
+                let range = b * SCATTER_BLOCK..((b + 1) * SCATTER_BLOCK).min(n);
+                let mut labels = Vec::with_capacity(range.len());
+                cuts.locate(&points[range.clone()], range.start as u32, &mut labels);
+                let mut count = vec![0usize; chunk_count];
+                for &c in &labels {
+                    count[c as usize] += 1;
+                }
+                (labels, count)
+            })
+            .unzip();
+        let sizes: Vec<usize> = (0..chunk_count).map(|c| counts.iter().map(|k| k[c]).sum()).collect();
+        // ... then every block's share of every chunk's arrays (disjoint
+        // slices, in block order, so each chunk keeps the input order) ...
+        let mut chunk_points: Vec<Vec<[f32; 3]>> = sizes.iter().map(|&s| vec![[0.0; 3]; s]).collect();
+        let mut order = vec![0u32; n];
+        let mut shares: Vec<Vec<Share>> = counts.iter().map(|_| Vec::with_capacity(chunk_count)).collect();
+        let mut order_rest = order.as_mut_slice();
+        for (c, chunk) in chunk_points.iter_mut().enumerate() {
+            let (mut order_chunk, tail) = std::mem::take(&mut order_rest).split_at_mut(sizes[c]);
+            order_rest = tail;
+            let mut points_chunk = chunk.as_mut_slice();
+            for (share, count) in shares.iter_mut().zip(&counts) {
+                let (p, p_tail) = std::mem::take(&mut points_chunk).split_at_mut(count[c]);
+                let (o, o_tail) = std::mem::take(&mut order_chunk).split_at_mut(count[c]);
+                points_chunk = p_tail;
+                order_chunk = o_tail;
+                share.push((p, o));
+            }
+        }
+        // ... filled in parallel.
+        shares
+            .into_par_iter()
+            .zip(labels)
+            .enumerate()
+            .for_each(|(b, (mut share, labels))| {
+                let mut fill = vec![0usize; chunk_count];
+                for (j, c) in labels.into_iter().enumerate() {
+                    let i = b * SCATTER_BLOCK + j;
+                    let (p, o) = &mut share[c as usize];
+                    let k = &mut fill[c as usize];
+                    p[*k] = points[i];
+                    o[*k] = i as u32;
+                    *k += 1;
+                }
+            });
         drop(points);
-        // The order (a serial copy of 4 bytes per point) is concatenated
-        // while the trees build.
-        let (chunks, order) = rayon::join(
-            || {
-                slices
-                    .into_par_iter()
-                    .zip(offsets.par_iter())
-                    .map(|(points, &offset)| {
-                        let (min, max) = bounds(&points);
-                        Chunk {
-                            min,
-                            max,
-                            tree: PhotonTree::new_from_slice(&points),
-                            offset,
-                            points: if keep_points { points } else { Vec::new() },
-                        }
-                    })
-                    .collect()
-            },
-            || parts.concat(),
-        );
-        (Self { chunks }, order)
+        let mut offset = 0u32;
+        let offsets: Vec<u32> = sizes
+            .iter()
+            .map(|&s| {
+                let o = offset;
+                offset += s as u32;
+                o
+            })
+            .collect();
+        let chunks = chunk_points
+            .into_par_iter()
+            .zip(offsets)
+            .map(|(points, offset)| {
+                let (min, max) = bounds(&points);
+                Chunk {
+                    min,
+                    max,
+                    tree: PhotonTree::new_from_slice(&points),
+                    offset,
+                    points: if keep_points { points } else { Vec::new() },
+                }
+            })
+            .collect();
+        (Self { cuts, chunks }, order)
+    }
+
+    /// Number of chunks.
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
     }
 
     /// Bytes held by the kept copies of the points.
@@ -131,49 +327,25 @@ impl ChunkedTree {
     /// the points kept (`build`).
     pub fn within_points(&self, q: &[f32; 3], r2: f32, out: &mut Vec<([f32; 3], u32)>) {
         out.clear();
-        for c in &self.chunks {
-            if c.distance2(q) <= r2 {
-                debug_assert!(c.points.len() == c.tree.size(), "points forgotten");
-                out.extend(
-                    c.tree
-                        .within_unsorted::<SquaredEuclidean>(q, r2)
-                        .into_iter()
-                        .filter_map(|nb| Some((*c.points.get(nb.item as usize)?, c.offset + nb.item))),
-                );
-            }
-        }
+        let mut reach = r2;
+        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
+            debug_assert!(c.points.len() == c.tree.size(), "points forgotten");
+            out.extend(
+                c.tree
+                    .within_unsorted::<SquaredEuclidean>(q, r2)
+                    .into_iter()
+                    .filter_map(|nb| Some((*c.points.get(nb.item as usize)?, c.offset + nb.item))),
+            );
+            r2
+        });
     }
 
     /// Up to `k` nearest points within squared distance `r2` of `q`, in no
     /// particular order.
     pub fn nearest_n_within(&self, q: &[f32; 3], r2: f32, k: NonZero<usize>) -> Vec<Neighbour> {
-        let mut near: Vec<(f32, &Chunk)> = self
-            .chunks
-            .iter()
-            .map(|c| (c.distance2(q), c))
-            .filter(|(d2, _)| *d2 <= r2)
-            .collect();
-        if let [(_, c)] = near.as_slice() {
-            return c
-                .tree
-                .nearest_n_within::<SquaredEuclidean>(q, r2, k, false)
-                .into_iter()
-                .map(|nb| Neighbour {
-                    distance: nb.distance,
-                    item: c.offset + nb.item,
-                })
-                .collect();
-        }
-        near.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut found: Vec<Neighbour> = Vec::new();
-        for (d2, c) in near {
-            if found.len() >= k.get() {
-                // The k-th distance bounds what another chunk could add.
-                let kth = found.iter().fold(0.0f32, |m, n| m.max(n.distance));
-                if d2 > kth {
-                    break;
-                }
-            }
+        let mut reach = r2;
+        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
             found.extend(
                 c.tree
                     .nearest_n_within::<SquaredEuclidean>(q, r2, k, false)
@@ -183,6 +355,9 @@ impl ChunkedTree {
                         item: c.offset + nb.item,
                     }),
             );
+            if found.len() < k.get() {
+                return r2;
+            }
             if found.len() > k.get() {
                 // Keep the k nearest, ties by item: deterministic.
                 found.select_nth_unstable_by(k.get() - 1, |a, b| {
@@ -190,85 +365,36 @@ impl ChunkedTree {
                 });
                 found.truncate(k.get());
             }
-        }
+            // The k-th distance bounds what another chunk could add.
+            found.iter().fold(0.0f32, |m, n| m.max(n.distance))
+        });
         found
     }
 
     /// The nearest point to `q`, if any (ties by item).
     pub fn nearest_one(&self, q: &[f32; 3]) -> Option<Neighbour> {
-        let mut near: Vec<(f32, &Chunk)> = self.chunks.iter().map(|c| (c.distance2(q), c)).collect();
-        near.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut best: Option<Neighbour> = None;
-        for (d2, c) in near {
-            if best.is_some_and(|b| d2 > b.distance) {
-                break;
+        let mut reach = f32::INFINITY;
+        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
+            if c.tree.size() > 0 {
+                let nb = c.tree.nearest_one::<SquaredEuclidean>(q);
+                let cand = Neighbour {
+                    distance: nb.distance,
+                    item: c.offset + nb.item,
+                };
+                if best.is_none_or(|b| (cand.distance, cand.item) < (b.distance, b.item)) {
+                    best = Some(cand);
+                }
             }
-            if c.tree.size() == 0 {
-                continue;
-            }
-            let nb = c.tree.nearest_one::<SquaredEuclidean>(q);
-            let cand = Neighbour {
-                distance: nb.distance,
-                item: c.offset + nb.item,
-            };
-            if best.is_none_or(|b| (cand.distance, cand.item) < (b.distance, b.item)) {
-                best = Some(cand);
-            }
-        }
+            best.map_or(f32::INFINITY, |b| b.distance)
+        });
         best
     }
 }
 
-/// Every this many points of a part, one goes into the sample whose median
-/// and bounds choose the cut (exact medians of 71M points took seconds).
+/// Every this many points, one goes into the sample whose medians and
+/// bounds choose the cuts (exact medians of 71M points took seconds).
 const CUT_SAMPLE_STRIDE: usize = 64;
-
-/// `depth` levels of median cuts of `idx` (indices into `points`) across the
-/// longest axis, in parallel; each part keeps the order of `idx`. The axis
-/// and the median come from a fixed sample (every [`CUT_SAMPLE_STRIDE`]-th
-/// point; the median in the total order (coordinate, index)), so the parts
-/// are a fixed function of the points and balanced to within the sample's
-/// precision.
-fn cut(points: &[[f32; 3]], idx: Vec<u32>, depth: u32) -> Vec<Vec<u32>> {
-    if depth == 0 || idx.len() < 2 * BUCKET {
-        return vec![idx];
-    }
-    let sample: Vec<u32> = idx.iter().step_by(CUT_SAMPLE_STRIDE).copied().collect();
-    let (min, max) = sample.iter().fold(EMPTY_BOUNDS, |b, &i| grow(b, &points[i as usize]));
-    let axis = (0..3)
-        .max_by(|&a, &b| (max[a] - min[a]).total_cmp(&(max[b] - min[b])))
-        .unwrap_or(0);
-    let key = |i: u32| (points[i as usize][axis], i);
-    let less = |a: (f32, u32), b: (f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-    let mut keys: Vec<(f32, u32)> = sample.iter().map(|&i| key(i)).collect();
-    let mid = keys.len() / 2;
-    let (_, &mut pivot, _) = keys.select_nth_unstable_by(mid, |&a, &b| less(a, b));
-    // A stable partition in blocks: each block splits in parallel, then the
-    // blocks' halves are concatenated in order.
-    let blocks: Vec<(Vec<u32>, Vec<u32>)> = idx
-        .par_chunks(1 << 16)
-        .map(|block| block.iter().partition(|&&i| less(key(i), pivot).is_lt()))
-        .collect();
-    drop(idx);
-    // The two halves are concatenated side by side (serial copies).
-    let (below, above) = rayon::join(
-        || concat(blocks.iter().map(|(b, _)| b)),
-        || concat(blocks.iter().map(|(_, a)| a)),
-    );
-    drop(blocks);
-    let (mut a, b) = rayon::join(|| cut(points, below, depth - 1), || cut(points, above, depth - 1));
-    a.extend(b);
-    a
-}
-
-/// `parts` one after the other, allocated once.
-fn concat<'a>(parts: impl Iterator<Item = &'a Vec<u32>> + Clone) -> Vec<u32> {
-    let mut out = Vec::with_capacity(parts.clone().map(Vec::len).sum());
-    for p in parts {
-        out.extend_from_slice(p);
-    }
-    out
-}
 
 type Bounds = ([f32; 3], [f32; 3]);
 
@@ -291,6 +417,53 @@ fn bounds(points: &[[f32; 3]]) -> Bounds {
 mod tests {
     use super::*;
     use crate::math::rng::{Domain, Rng};
+
+    /// The depth brings chunks to the target size, capped at 256 chunks.
+    #[test]
+    fn chunk_depth_follows_the_target() {
+        assert_eq!(chunk_depth(0), 0);
+        assert_eq!(chunk_depth(CHUNK_TARGET), 0);
+        assert_eq!(chunk_depth(CHUNK_TARGET + 1), 1);
+        assert_eq!(chunk_depth(71_000_000), 8);
+        assert_eq!(chunk_depth(usize::MAX / 2), 8);
+    }
+
+    /// More levels than the sample can fill leave empty chunks; with
+    /// coincident points (ties on every axis) and an empty set, queries
+    /// still answer as a brute-force search, and the order is a permutation
+    /// keeping each chunk's points in input order.
+    #[test]
+    fn sparse_and_tied_points_match_brute_force() {
+        let empty = ChunkedTree::build(Vec::new(), 4, true);
+        assert!(empty.1.is_empty());
+        assert!(empty.0.nearest_one(&[0.0; 3]).is_none());
+        let k = NonZero::new(5).unwrap();
+        assert!(empty.0.nearest_n_within(&[0.0; 3], 1.0, k).is_empty());
+        let mut points: Vec<[f32; 3]> = (0..300).map(|i| [(i % 7) as f32, 0.5, (i % 3) as f32]).collect();
+        points.extend(std::iter::repeat_n([2.0, 0.5, 1.0], 200));
+        let (tree, order) = ChunkedTree::build(points.clone(), 8, true);
+        assert_eq!(tree.chunk_count(), 256);
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert!(sorted.iter().enumerate().all(|(i, &j)| i as u32 == j));
+        for c in &tree.chunks {
+            let ids = &order[c.offset as usize..c.offset as usize + c.tree.size()];
+            assert!(ids.windows(2).all(|w| w[0] < w[1]), "a chunk lost the input order");
+        }
+        let mut found = Vec::new();
+        for q in [[2.0, 0.5, 1.0], [0.2, 0.4, 2.1], [6.5, 0.5, -1.0]] {
+            let d2 = |p: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]) * (p[i] - q[i])).sum::<f32>();
+            let mut brute: Vec<f32> = points.iter().map(d2).collect();
+            brute.sort_by(|a, b| a.total_cmp(b));
+            let mut got: Vec<f32> = tree.nearest_n_within(&q, 2.0, k).iter().map(|n| n.distance).collect();
+            got.sort_by(|a, b| a.total_cmp(b));
+            let want: Vec<f32> = brute.iter().copied().filter(|&d| d <= 2.0).take(5).collect();
+            assert_eq!(got, want);
+            assert_eq!(tree.nearest_one(&q).unwrap().distance, brute[0]);
+            tree.within_points(&q, 1.5, &mut found);
+            assert_eq!(found.len(), brute.iter().filter(|&&d| d <= 1.5).count());
+        }
+    }
 
     /// Chunked queries return what a brute-force search returns.
     #[test]

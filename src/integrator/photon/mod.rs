@@ -122,9 +122,18 @@ pub fn photon_pass_with(
 ) -> (PhotonMap, PhotonStats) {
     let start = Instant::now();
     let tracer = PhotonTracer::new(scene, accel, count);
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut records: Vec<PhotonRecord> = Vec::new();
-    let mut sites: Vec<IrradianceSite> = Vec::new();
+    // A path stores at most one photon, so `count` bounds the arrays:
+    // reserved at once (address space only, pages are touched as photons
+    // arrive), they never move while growing; growth by doubling copied
+    // and page-faulted them anew, 3 GiB at 100M photons.
+    let capacity = usize::try_from(count).unwrap_or(usize::MAX);
+    let mut positions: Vec<[f32; 3]> = Vec::with_capacity(capacity);
+    let mut records: Vec<PhotonRecord> = Vec::with_capacity(capacity);
+    let mut sites: Vec<IrradianceSite> = if precompute.is_some() {
+        Vec::with_capacity(capacity / PRECOMPUTE_STRIDE + 1)
+    } else {
+        Vec::new()
+    };
     let mut rays = 0u64;
     // Tracing and packing run in parallel; the copies of one batch into the
     // final arrays (memcpy of 20 bytes per photon, and the page faults of
