@@ -234,65 +234,15 @@ impl ChunkedTree {
             .collect();
         let cuts = Cuts::plan(&mut sample, depth.min(MAX_DEPTH));
         drop(sample);
-        let chunk_count = cuts.chunk_count();
 
-        // Counting sort: each block's chunk of every point and its counts...
-        let (labels, counts): (Vec<Vec<u8>>, Vec<Vec<usize>>) = (0..n.div_ceil(SCATTER_BLOCK))
-            .into_par_iter()
-            .map(|b| {
-                let range = b * SCATTER_BLOCK..((b + 1) * SCATTER_BLOCK).min(n);
-                let mut labels = Vec::with_capacity(range.len());
-                cuts.locate(&points[range.clone()], range.start as u32, &mut labels);
-                let mut count = vec![0usize; chunk_count];
-                for &c in &labels {
-                    count[c as usize] += 1;
-                }
-                (labels, count)
-            })
-            .unzip();
-        let sizes: Vec<usize> = (0..chunk_count).map(|c| counts.iter().map(|k| k[c]).sum()).collect();
-        // ... then every block's share of every chunk's arrays (disjoint
-        // slices, in block order, so each chunk keeps the input order) ...
-        let mut chunk_points: Vec<Vec<[f32; 3]>> = sizes.iter().map(|&s| vec![[0.0; 3]; s]).collect();
-        let mut order = vec![0u32; n];
-        let mut shares: Vec<Vec<Share>> = counts.iter().map(|_| Vec::with_capacity(chunk_count)).collect();
-        let mut order_rest = order.as_mut_slice();
-        for (c, chunk) in chunk_points.iter_mut().enumerate() {
-            let (mut order_chunk, tail) = std::mem::take(&mut order_rest).split_at_mut(sizes[c]);
-            order_rest = tail;
-            let mut points_chunk = chunk.as_mut_slice();
-            for (share, count) in shares.iter_mut().zip(&counts) {
-                let (p, p_tail) = std::mem::take(&mut points_chunk).split_at_mut(count[c]);
-                let (o, o_tail) = std::mem::take(&mut order_chunk).split_at_mut(count[c]);
-                points_chunk = p_tail;
-                order_chunk = o_tail;
-                share.push((p, o));
-            }
-        }
-        // ... filled in parallel.
-        shares
-            .into_par_iter()
-            .zip(labels)
-            .enumerate()
-            .for_each(|(b, (mut share, labels))| {
-                let mut fill = vec![0usize; chunk_count];
-                for (j, c) in labels.into_iter().enumerate() {
-                    let i = b * SCATTER_BLOCK + j;
-                    let (p, o) = &mut share[c as usize];
-                    let k = &mut fill[c as usize];
-                    p[*k] = points[i];
-                    o[*k] = i as u32;
-                    *k += 1;
-                }
-            });
+        let (chunk_points, order) = scatter(&points, &cuts);
         drop(points);
-        let mut offset = 0u32;
-        let offsets: Vec<u32> = sizes
+        let offsets: Vec<u32> = chunk_points
             .iter()
-            .map(|&s| {
-                let o = offset;
-                offset += s as u32;
-                o
+            .scan(0u32, |next, c| {
+                let offset = *next;
+                *next += c.len() as u32;
+                Some(offset)
             })
             .collect();
         let chunks = chunk_points
@@ -390,6 +340,64 @@ impl ChunkedTree {
         });
         best
     }
+}
+
+/// The points of each chunk of `cuts`, in input order, and the concatenated
+/// order (`order[j]` is the input index of the `j`-th point of the chunks
+/// one after the other): a counting sort in parallel blocks.
+fn scatter(points: &[[f32; 3]], cuts: &Cuts) -> (Vec<Vec<[f32; 3]>>, Vec<u32>) {
+    let n = points.len();
+    let chunk_count = cuts.chunk_count();
+    // Counting sort: each block's chunk of every point and its counts...
+    let (labels, counts): (Vec<Vec<u8>>, Vec<Vec<usize>>) = (0..n.div_ceil(SCATTER_BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let range = b * SCATTER_BLOCK..((b + 1) * SCATTER_BLOCK).min(n);
+            let mut labels = Vec::with_capacity(range.len());
+            cuts.locate(&points[range.clone()], range.start as u32, &mut labels);
+            let mut count = vec![0usize; chunk_count];
+            for &c in &labels {
+                count[c as usize] += 1;
+            }
+            (labels, count)
+        })
+        .unzip();
+    let sizes: Vec<usize> = (0..chunk_count).map(|c| counts.iter().map(|k| k[c]).sum()).collect();
+    // ... then every block's share of every chunk's arrays (disjoint
+    // slices, in block order, so each chunk keeps the input order) ...
+    let mut chunk_points: Vec<Vec<[f32; 3]>> = sizes.iter().map(|&s| vec![[0.0; 3]; s]).collect();
+    let mut order = vec![0u32; n];
+    let mut shares: Vec<Vec<Share>> = counts.iter().map(|_| Vec::with_capacity(chunk_count)).collect();
+    let mut order_rest = order.as_mut_slice();
+    for (c, chunk) in chunk_points.iter_mut().enumerate() {
+        let (mut order_chunk, tail) = std::mem::take(&mut order_rest).split_at_mut(sizes[c]);
+        order_rest = tail;
+        let mut points_chunk = chunk.as_mut_slice();
+        for (share, count) in shares.iter_mut().zip(&counts) {
+            let (p, p_tail) = std::mem::take(&mut points_chunk).split_at_mut(count[c]);
+            let (o, o_tail) = std::mem::take(&mut order_chunk).split_at_mut(count[c]);
+            points_chunk = p_tail;
+            order_chunk = o_tail;
+            share.push((p, o));
+        }
+    }
+    // ... filled in parallel.
+    shares
+        .into_par_iter()
+        .zip(labels)
+        .enumerate()
+        .for_each(|(b, (mut share, labels))| {
+            let mut fill = vec![0usize; chunk_count];
+            for (j, c) in labels.into_iter().enumerate() {
+                let i = b * SCATTER_BLOCK + j;
+                let (p, o) = &mut share[c as usize];
+                let k = &mut fill[c as usize];
+                p[*k] = points[i];
+                o[*k] = i as u32;
+                *k += 1;
+            }
+        });
+    (chunk_points, order)
 }
 
 /// Every this many points, one goes into the sample whose medians and

@@ -125,7 +125,7 @@ pub fn photon_pass_with(
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
     // arrive), they never move while growing; growth by doubling copied
-    // and page-faulted them anew, 3 GiB at 100M photons.
+    // and page-faulted them anew (2.8 GiB of faults at 100M photons).
     let capacity = usize::try_from(count).unwrap_or(usize::MAX);
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(capacity);
     let mut records: Vec<PhotonRecord> = Vec::with_capacity(capacity);
