@@ -137,7 +137,7 @@ pub fn photon_pass_with(
     let mut rays = 0u64;
     // Tracing and packing run in parallel; the copies of one batch into the
     // final arrays (memcpy of 20 bytes per photon, and the page faults of
-    // the arrays' growth) run on one thread while the next batch is traced,
+    // their first touch) run on one thread while the next batch is traced,
     // so no core waits for them. Batches are appended in emission order.
     let trace_batch = |batch_start: u64| -> Vec<TracedChunk> {
         let batch_end = (batch_start + BATCH).min(count);
