@@ -246,22 +246,27 @@ impl<'a> PhotonTracer<'a> {
         })
     }
 
-    /// Traces photons `first..last` and returns the stored ones with their
-    /// emission indices, in index order, and the number of rays cast. The photons advance together:
-    /// each bounce's rays (up to [`WAVEFRONT`] neighbouring photons, in
-    /// index order, hence coherent) go to [`Accel::intersect_many`] as one
-    /// batch. Each photon's path depends only on its own stream, so the
-    /// result is the same as tracing them one by one.
-    pub fn trace_range(&self, first: u64, last: u64) -> (Vec<(u64, Photon)>, u64) {
-        let mut stored = Vec::new();
+    /// Traces photons `first..last`, hands each stored one with its
+    /// emission index to `store`, in index order, and returns the number of
+    /// rays cast. The photons advance together: each bounce's rays (up to
+    /// [`WAVEFRONT`] neighbouring photons, in index order, hence coherent)
+    /// go to [`Accel::intersect_many`] as one batch. Each photon's path
+    /// depends only on its own stream, so the result is the same as tracing
+    /// them one by one. The buffers live for the whole range: nothing is
+    /// allocated per wavefront, and stored photons go straight to `store`
+    /// (the caller's packed arrays) instead of a growing list.
+    pub fn trace_range(&self, first: u64, last: u64, mut store: impl FnMut(u64, Photon)) -> u64 {
         let mut rays = 0u64;
         let mut batch: Vec<Ray> = Vec::with_capacity(WAVEFRONT);
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(WAVEFRONT);
+        let mut paths: Vec<PhotonPath> = Vec::with_capacity(WAVEFRONT);
+        let mut wave: Vec<(u64, Photon)> = Vec::with_capacity(WAVEFRONT);
         let mut start = first;
         while start < last {
             let end = (start + WAVEFRONT as u64).min(last);
-            let mut paths: Vec<PhotonPath> = (start..end).filter_map(|i| self.emit(i)).collect();
-            let mut wave: Vec<(u64, Photon)> = Vec::new();
+            paths.clear();
+            paths.extend((start..end).filter_map(|i| self.emit(i)));
+            wave.clear();
             while !paths.is_empty() {
                 batch.clear();
                 batch.extend(paths.iter().map(|p| p.ray));
@@ -284,10 +289,12 @@ impl<'a> PhotonTracer<'a> {
             }
             // Photons store in the order their paths ended: back to index order.
             wave.sort_unstable_by_key(|&(index, _)| index);
-            stored.append(&mut wave);
+            for &(index, photon) in &wave {
+                store(index, photon);
+            }
             start = end;
         }
-        (stored, rays)
+        rays
     }
 
     /// The cone choice and the 2-D direction sample of photon `index`:

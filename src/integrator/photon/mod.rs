@@ -147,12 +147,16 @@ pub fn photon_pass_with(
             .map(|c| {
                 let first = batch_start + c * CHUNK;
                 let last = (first + CHUNK).min(batch_end);
-                let (photons, rays) = tracer.trace_range(first, last);
+                // A path stores at most one photon: the task's arrays are
+                // reserved for all of them and never grow.
+                let most = (last - first) as usize;
                 let mut out = TracedChunk {
-                    rays,
-                    ..TracedChunk::default()
+                    positions: Vec::with_capacity(most),
+                    records: Vec::with_capacity(most),
+                    sites: Vec::new(),
+                    rays: 0,
                 };
-                for (i, p) in photons {
+                out.rays = tracer.trace_range(first, last, |i, p| {
                     if p.position.is_finite() && p.power.is_finite() {
                         out.positions.push(p.position.to_array());
                         out.records.push(PhotonRecord::new(p.power, p.incoming));
@@ -163,7 +167,7 @@ pub fn photon_pass_with(
                             });
                         }
                     }
-                }
+                });
                 out
             })
             .collect()
