@@ -207,6 +207,17 @@ pub struct Neighbour {
     pub item: u32,
 }
 
+impl Neighbour {
+    /// The total order of answers, squared distance then item, as one
+    /// integer: a squared distance is never negative (nor NaN: positions
+    /// are finite), and the bits of non-negative floats are ordered as
+    /// their values.
+    #[inline]
+    pub fn order_key(&self) -> u64 {
+        (u64::from(self.distance.to_bits()) << 32) | u64::from(self.item)
+    }
+}
+
 /// One block's part of one chunk: its points and their input indices.
 type Share<'a> = (&'a mut [[f32; 3]], &'a mut [u32]);
 
@@ -305,9 +316,7 @@ impl ChunkedTree {
             }
             if found.len() > k.get() {
                 // Keep the k nearest, ties by item: deterministic.
-                found.select_nth_unstable_by(k.get() - 1, |a, b| {
-                    a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item))
-                });
+                found.select_nth_unstable_by_key(k.get() - 1, Neighbour::order_key);
                 found.truncate(k.get());
             }
             // The k-th distance bounds what another chunk could add.
@@ -327,7 +336,7 @@ impl ChunkedTree {
                     distance: nb.distance,
                     item: c.offset + nb.item,
                 };
-                if best.is_none_or(|b| (cand.distance, cand.item) < (b.distance, b.item)) {
+                if best.is_none_or(|b| cand.order_key() < b.order_key()) {
                     best = Some(cand);
                 }
             }

@@ -37,7 +37,6 @@ const CHUNK: u64 = 4096;
 const BATCH: u64 = 1 << 20;
 
 /// What one rayon task of the photon pass produced, already packed.
-#[derive(Default)]
 struct TracedChunk {
     positions: Vec<[f32; 3]>,
     records: Vec<PhotonRecord>,

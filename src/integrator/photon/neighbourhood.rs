@@ -162,7 +162,7 @@ const CAP_PER_K: usize = 6;
 /// The `k` nearest of `points` to `q` within `max_radius` into `out`,
 /// sorted by squared distance, then item, and how far the answer reaches:
 /// the k-th distance when `k` were found, else `max_radius` (all within it
-/// counted). Selected on [`order_key`]: an insertion into a sorted list per
+/// counted). Selected on [`Neighbour::order_key`]: an insertion into a sorted list per
 /// point (a mispredicted branch and a move each) took a quarter of the
 /// underwater image's time.
 #[inline]
@@ -178,22 +178,14 @@ fn rank(q: &[f32; 3], points: &[([f32; 3], u32)], max_radius: f32, k: NonZero<us
         })
     }));
     if out.len() > k {
-        out.select_nth_unstable_by_key(k - 1, order_key);
+        out.select_nth_unstable_by_key(k - 1, Neighbour::order_key);
         out.truncate(k);
     }
-    out.sort_unstable_by_key(order_key);
+    out.sort_unstable_by_key(Neighbour::order_key);
     if out.len() < k {
         return max_radius;
     }
     out.last().map_or(max_radius, |nb| nb.distance.sqrt())
-}
-
-/// The total order of answers, squared distance then item, as one integer:
-/// a squared distance is never negative (nor NaN: positions are finite),
-/// and the bits of non-negative floats are ordered as their values.
-#[inline]
-fn order_key(nb: &Neighbour) -> u64 {
-    (u64::from(nb.distance.to_bits()) << 32) | u64::from(nb.item)
 }
 
 /// Squared Euclidean distance (kiddo's `SquaredEuclidean`, same order of operations).
