@@ -7,7 +7,8 @@
 //!   objects (mesh instances, spheres, quads); an object straddling a plane is
 //!   referenced by both sides, and a small mailbox avoids testing it twice in
 //!   one query.
-//! * Traversal: iterative, front to back, fixed stack (pbrt-v3
+//! * Traversal: iterative, front to back for closest hits and back to
+//!   front for occlusion, fixed stack (pbrt-v3
 //!   `KdTreeAccel::Intersect`), rays moved into object space with
 //!   `Transform::ray_to_object` (the direction is not renormalised, so `t`
 //!   keeps its world meaning).
@@ -28,6 +29,7 @@ use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3, Vec3A};
 use crate::scene::{Mesh, Quad, Scene, Shape, Sphere};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -224,7 +226,8 @@ impl KdTreeAccel {
                 let blas = &self.blas[*mesh as usize];
                 let watertight = WatertightRay::new(&local);
                 let test = self.test;
-                blas.tree.traverse(&local, *limit, |range| {
+                let start_limit = *limit;
+                let leaf = |range: Range<usize>| {
                     for tri in &blas.tris[range] {
                         let prim = tri.prim;
                         let [p0, p1, p2] = tri.corners.map(Vec3A::from);
@@ -249,7 +252,13 @@ impl KdTreeAccel {
                         }
                     }
                     LeafResult::Continue(*limit)
-                });
+                };
+                // Any-hit queries go back to front (see `KdTree::traverse`).
+                if any {
+                    blas.tree.traverse::<true>(&local, start_limit, leaf);
+                } else {
+                    blas.tree.traverse::<false>(&local, start_limit, leaf);
+                }
             }
         }
     }
@@ -277,7 +286,7 @@ impl KdTreeAccel {
         }
         let mut hit = false;
         let mut mailbox = Mailbox::default();
-        self.top.traverse(ray, t_max, |range| {
+        self.top.traverse::<true>(ray, t_max, |range| {
             for &instance in &self.top.prim_indices[range] {
                 if mailbox.seen(instance) {
                     continue;
@@ -319,7 +328,7 @@ impl KdTreeAccel {
         let mut best_t = f32::INFINITY;
         let mut mailbox = Mailbox::default();
         let mut window = |t: f32| ulps_above(t, TIE_ULPS).min(t_max);
-        self.top.traverse(ray, t_max, |range| {
+        self.top.traverse::<false>(ray, t_max, |range| {
             for &instance in &self.top.prim_indices[range] {
                 if mailbox.seen(instance) {
                     continue;

