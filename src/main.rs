@@ -555,7 +555,8 @@ fn render_with(scene: &Scene, args: &RenderArgs, png: Option<&Path>, run: LongRu
     let kind = args.accel.kind();
     let accel = accel::build(scene, kind, &args.accel.options(scene))?;
     let stats = accel.stats();
-    let plan = RenderPlan::new(scene);
+    let mut plan = RenderPlan::new(scene);
+    plan.keep_photon_positions = matches!(args.debug, Some(DebugView::Photons));
     let st = &scene.settings;
     if !args.quiet {
         eprintln!(

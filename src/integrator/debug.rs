@@ -73,7 +73,7 @@ fn put(film: &mut Film, x: f32, y: f32, colour: Vec3) {
 pub fn overlay_photons(film: &mut Film, scene: &Scene, map: &PhotonMap) {
     let proj = Projector::new(&scene.camera, film.width, film.height);
     for i in 0..map.len() {
-        let Some((x, y)) = proj.project(map.coarse_position(i)) else {
+        let Some((x, y)) = map.coarse_position(i).and_then(|p| proj.project(p)) else {
             continue;
         };
         let power = map.record(i).power();

@@ -132,6 +132,9 @@ pub struct RenderPlan {
     pub photons: PhotonPlan,
     /// Fog.
     pub fog: FogPlan,
+    /// Keep a coarse copy of every photon's position for the debug
+    /// overlay (`--debug photons`); off by default: 6 bytes per photon.
+    pub keep_photon_positions: bool,
 }
 
 impl RenderPlan {
@@ -227,6 +230,7 @@ impl RenderPlan {
             sharing,
             photons,
             fog,
+            keep_photon_positions: false,
         }
     }
 

@@ -218,7 +218,13 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
                     plan.width as u64 * plan.height as u64,
                 )),
             };
-            Some(photon_pass_with(scene, accel, count, precompute.as_ref()))
+            Some(photon_pass_with(
+                scene,
+                accel,
+                count,
+                precompute.as_ref(),
+                plan.keep_photon_positions,
+            ))
         }
         _ => None,
     }

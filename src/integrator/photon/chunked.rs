@@ -19,6 +19,7 @@
 //! returns so that callers reorder their per-point payloads alike.
 
 use super::map::{PhotonTree, BUCKET};
+use crate::math::sampling::morton_code;
 use kiddo::SquaredEuclidean;
 use rayon::prelude::*;
 use std::num::NonZero;
@@ -229,10 +230,13 @@ impl ChunkedTree {
     /// (capped at 8). Returns the tree and `order`: `order[j]` is the index
     /// in `points` of the point that the tree calls `j`.
     ///
-    /// Each chunk keeps its points in their input order. Photons arrive in
-    /// emission order, which is spatially coherent (Morton-ordered strata),
-    /// and kiddo's build runs about three times faster over coherent points
-    /// than over shuffled ones.
+    /// Each chunk's points are sorted along a Z-order curve before kiddo
+    /// builds its tree ([`morton_sort`]): kiddo's build is cache-bound (it
+    /// runs about three times faster over coherent points than over
+    /// shuffled ones), and the items of a leaf, hence the payloads a query
+    /// reads, become neighbours in memory. At 100M photons (71M stored)
+    /// kiddo's builds went 4.2 s → 3.2 s and the irradiance precompute
+    /// 7.8 s → 6.3 s, for 1.2 s of sorting.
     ///
     /// With `keep_points`, each chunk keeps its points in item order (12
     /// bytes each) for [`within_points`](Self::within_points).
@@ -246,20 +250,23 @@ impl ChunkedTree {
         let cuts = Cuts::plan(&mut sample, depth.min(MAX_DEPTH));
         drop(sample);
 
-        let (chunk_points, order) = scatter(&points, &cuts);
+        let (chunk_points, mut order) = scatter(&points, &cuts);
         drop(points);
-        let offsets: Vec<u32> = chunk_points
-            .iter()
-            .scan(0u32, |next, c| {
-                let offset = *next;
-                *next += c.len() as u32;
-                Some(offset)
-            })
-            .collect();
+        // Each chunk's share of `order`, sorted with its points.
+        let mut rest = order.as_mut_slice();
+        let mut shares = Vec::with_capacity(chunk_points.len());
+        let mut offset = 0u32;
+        for c in &chunk_points {
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(c.len());
+            shares.push((head, offset));
+            rest = tail;
+            offset += c.len() as u32;
+        }
         let chunks = chunk_points
             .into_par_iter()
-            .zip(offsets)
-            .map(|(points, offset)| {
+            .zip(shares)
+            .map_init(MortonScratch::default, |scratch, (mut points, (order, offset))| {
+                morton_sort(&mut points, order, scratch);
                 let (min, max) = bounds(&points);
                 Chunk {
                     min,
@@ -404,6 +411,80 @@ fn scatter(points: &[[f32; 3]], cuts: &Cuts) -> (Vec<Vec<[f32; 3]>>, Vec<u32>) {
     (chunk_points, order)
 }
 
+/// Scratch arrays of [`morton_sort`], kept by each worker thread across
+/// chunks (nothing is allocated per chunk).
+#[derive(Default)]
+struct MortonScratch {
+    keys: Vec<u64>,
+    buffer: Vec<u64>,
+    points: Vec<[f32; 3]>,
+    order: Vec<u32>,
+}
+
+/// `points` (and `order` alike) sorted along a Z-order curve over their
+/// bounds (10 bits per axis; ties keep their input order): kiddo's build
+/// then reads neighbouring memory at every level, and the leaves' items,
+/// hence the photon records a gather reads, are neighbours in memory.
+fn morton_sort(points: &mut [[f32; 3]], order: &mut [u32], scratch: &mut MortonScratch) {
+    let (min, max) = bounds(points);
+    let scale: [f32; 3] = std::array::from_fn(|a| {
+        let extent = max[a] - min[a];
+        if extent > 0.0 {
+            1023.0 / extent
+        } else {
+            0.0
+        }
+    });
+    let MortonScratch {
+        keys,
+        buffer,
+        points: old_points,
+        order: old_order,
+    } = scratch;
+    keys.clear();
+    keys.extend(points.iter().enumerate().map(|(i, p)| {
+        let cell = std::array::from_fn(|a| (((p[a] - min[a]) * scale[a]) as u32).min(1023));
+        (morton_code(cell) << 32) | i as u64
+    }));
+    radix_sort_high(keys, buffer);
+    old_points.clear();
+    old_points.extend_from_slice(points);
+    old_order.clear();
+    old_order.extend_from_slice(order);
+    for ((p, o), &k) in points.iter_mut().zip(order.iter_mut()).zip(keys.iter()) {
+        let from = k as u32 as usize;
+        *p = old_points[from];
+        *o = old_order[from];
+    }
+}
+
+/// Sorts `keys` by their high 30 bits (stable): three passes of a
+/// least-significant-digit radix sort, 10 bits each, through `buffer`.
+fn radix_sort_high(keys: &mut Vec<u64>, buffer: &mut Vec<u64>) {
+    buffer.clear();
+    buffer.resize(keys.len(), 0);
+    for pass in 0..3 {
+        let shift = 32 + 10 * pass;
+        let digit = |k: u64| ((k >> shift) & 1023) as usize;
+        let mut start = [0usize; 1024];
+        for &k in keys.iter() {
+            start[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for s in start.iter_mut() {
+            let count = *s;
+            *s = sum;
+            sum += count;
+        }
+        for &k in keys.iter() {
+            let d = digit(k);
+            buffer[start[d]] = k;
+            start[d] += 1;
+        }
+        std::mem::swap(keys, buffer);
+    }
+}
+
 /// Every this many points, one goes into the sample whose medians and
 /// bounds choose the cuts (exact medians of 71M points took seconds).
 const CUT_SAMPLE_STRIDE: usize = 64;
@@ -432,6 +513,45 @@ mod tests {
 
     /// The depth brings chunks to the target size, capped at 256 chunks.
     #[test]
+    fn morton_sort_orders_along_the_curve_and_keeps_ties_in_order() {
+        let mut rng = crate::math::rng::Rng::new(3, crate::math::rng::Domain::Analysis, 0, 0);
+        let input: Vec<[f32; 3]> = (0..5000)
+            .map(|i| {
+                if i % 10 == 0 {
+                    [0.25, 0.5, 0.75] // ties
+                } else {
+                    [rng.f32() * 4.0, rng.f32(), -rng.f32() * 2.0]
+                }
+            })
+            .collect();
+        let mut points = input.clone();
+        let mut order: Vec<u32> = (100..5100).collect();
+        let mut scratch = MortonScratch::default();
+        morton_sort(&mut points, &mut order, &mut scratch);
+        let (min, max) = bounds(&input);
+        let code = |p: &[f32; 3]| {
+            morton_code(std::array::from_fn(|a| {
+                (((p[a] - min[a]) * (1023.0 / (max[a] - min[a]))) as u32).min(1023)
+            }))
+        };
+        for (j, p) in points.iter().enumerate() {
+            assert_eq!(*p, input[order[j] as usize - 100], "points and order moved together");
+        }
+        for w in order.windows(2) {
+            let (a, b) = (&input[w[0] as usize - 100], &input[w[1] as usize - 100]);
+            assert!(code(a) < code(b) || (code(a) == code(b) && w[0] < w[1]), "{a:?} {b:?}");
+        }
+        // Reused scratch, a smaller chunk: the same function of its input.
+        let mut again = input[..700].to_vec();
+        let mut again_order: Vec<u32> = (0..700).collect();
+        morton_sort(&mut again, &mut again_order, &mut scratch);
+        let mut fresh = input[..700].to_vec();
+        let mut fresh_order: Vec<u32> = (0..700).collect();
+        morton_sort(&mut fresh, &mut fresh_order, &mut MortonScratch::default());
+        assert_eq!((again, again_order), (fresh, fresh_order));
+    }
+
+    #[test]
     fn chunk_depth_follows_the_target() {
         assert_eq!(chunk_depth(0), 0);
         assert_eq!(chunk_depth(CHUNK_TARGET), 0);
@@ -443,7 +563,7 @@ mod tests {
     /// More levels than the sample can fill leave empty chunks; with
     /// coincident points (ties on every axis) and an empty set, queries
     /// still answer as a brute-force search, and the order is a permutation
-    /// keeping each chunk's points in input order.
+    /// that keeps tied points in input order.
     #[test]
     fn sparse_and_tied_points_match_brute_force() {
         let empty = ChunkedTree::build(Vec::new(), 4, true);
@@ -460,7 +580,14 @@ mod tests {
         assert!(sorted.iter().enumerate().all(|(i, &j)| i as u32 == j));
         for c in &tree.chunks {
             let ids = &order[c.offset as usize..c.offset as usize + c.tree.size()];
-            assert!(ids.windows(2).all(|w| w[0] < w[1]), "a chunk lost the input order");
+            // The kept points are the input points `order` names...
+            assert!(ids.iter().zip(&c.points).all(|(&i, p)| points[i as usize] == *p));
+            // ... and equal points keep their input order.
+            assert!(
+                ids.windows(2)
+                    .all(|w| points[w[0] as usize] != points[w[1] as usize] || w[0] < w[1]),
+                "a chunk lost the input order of ties"
+            );
         }
         let mut found = Vec::new();
         for q in [[2.0, 0.5, 1.0], [0.2, 0.4, 2.1], [6.5, 0.5, -1.0]] {

@@ -12,10 +12,11 @@
 //! | photon index, in the tree's leaves (u32) | 4 |
 //! | power, RGBE shared exponent (Ward 1991) | 4 |
 //! | incoming direction, octahedral 2 × u16 (Cigolle et al. 2014) | 4 |
-//! | coarse position for the debug overlay (3 × u16 over the map's bounds) | 6 |
 //! | tree stems and leaf extents (≈ 12 bytes per 32-photon leaf) | ≈ 0.4 |
 //!
-//! about 30.4 bytes per stored photon ([`BYTES_PER_PHOTON`]). While the map
+//! about 24.4 bytes per stored photon ([`BYTES_PER_PHOTON`]). Only for the
+//! debug overlay (`--debug photons`), the map also keeps a coarse position
+//! per photon (3 × u16 over the map's bounds, 6 bytes). While the map
 //! is built, kiddo also holds the source positions (12 B) and a sort index
 //! (8 B, `usize`): the peak is [`PEAK_BYTES_PER_PHOTON`].
 
@@ -45,12 +46,13 @@ pub fn to_tree(rotation: &Mat3A, p: Vec3A) -> [f32; 3] {
 pub const BUCKET: usize = 32;
 
 /// Bytes held per stored photon once the map is built (see the module docs).
-pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 6.0 + 12.0 / BUCKET as f64;
+pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 12.0 / BUCKET as f64;
 
 /// Bytes per photon at the peak of the build, rounded up: the chunks'
 /// positions (12), kiddo's leaves and `usize` sort index (24), the chunk
-/// order (4), records (8) and coarse positions (6), plus slack for the
-/// reordering of records and coarse positions that follows.
+/// order (4), records (8) and, for the debug overlay, coarse positions
+/// (6), plus slack for the reordering of records and coarse positions
+/// that follows.
 pub const PEAK_BYTES_PER_PHOTON: u64 = 56;
 
 /// The k-d tree type: f32 coordinates, u32 photon indices, 3-D.
@@ -249,12 +251,13 @@ impl std::fmt::Debug for PhotonMap {
 impl PhotonMap {
     /// Builds the map from positions and their records (same order; the
     /// tree's items are indices into `records`). Consumes the positions:
-    /// afterwards they live only in the tree's leaves.
+    /// afterwards they live only in the tree's leaves, and, with
+    /// `keep_coarse`, as coarse copies for the debug overlay.
     ///
     /// # Panics
     /// If the lengths differ or there are more than `u32::MAX` photons (the
     /// photon pass never produces either).
-    pub fn build(positions: Vec<[f32; 3]>, records: Vec<PhotonRecord>) -> Self {
+    pub fn build(positions: Vec<[f32; 3]>, records: Vec<PhotonRecord>, keep_coarse: bool) -> Self {
         assert_eq!(positions.len(), records.len());
         assert!(positions.len() <= u32::MAX as usize, "too many photons for u32 indices");
         let bounds = positions
@@ -267,15 +270,19 @@ impl PhotonMap {
             bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE))
         };
         let scale = Vec3A::splat(65535.0) / extent;
-        let coarse = positions
-            .par_iter()
-            .map(|p| {
-                let q = ((Vec3A::from_array(*p) - bounds.min) * scale)
-                    .round()
-                    .clamp(Vec3A::ZERO, Vec3A::splat(65535.0));
-                [q.x as u16, q.y as u16, q.z as u16]
-            })
-            .collect();
+        let coarse: Vec<[u16; 3]> = if !keep_coarse {
+            Vec::new()
+        } else {
+            positions
+                .par_iter()
+                .map(|p| {
+                    let q = ((Vec3A::from_array(*p) - bounds.min) * scale)
+                        .round()
+                        .clamp(Vec3A::ZERO, Vec3A::splat(65535.0));
+                    [q.x as u16, q.y as u16, q.z as u16]
+                })
+                .collect()
+        };
         let rotation = tree_rotation();
         let mut positions = positions;
         positions
@@ -283,7 +290,7 @@ impl PhotonMap {
             .for_each(|p| *p = to_tree(&rotation, Vec3A::from_array(*p)));
         let (tree, order) = build_tree(positions, false);
         let records = reorder(records, &order);
-        let coarse = reorder(coarse, &order);
+        let coarse = if keep_coarse { reorder(coarse, &order) } else { coarse };
         Self {
             tree,
             rotation,
@@ -298,7 +305,7 @@ impl PhotonMap {
     pub fn from_photons(photons: &[Photon]) -> Self {
         let positions = photons.iter().map(|p| p.position.to_array()).collect();
         let records = photons.iter().map(|p| PhotonRecord::new(p.power, p.incoming)).collect();
-        Self::build(positions, records)
+        Self::build(positions, records, true)
     }
 
     /// Number of stored photons.
@@ -323,7 +330,7 @@ impl PhotonMap {
         let n = self.len();
         tree_bytes(n)
             + n * std::mem::size_of::<PhotonRecord>()
-            + n * std::mem::size_of::<[u16; 3]>()
+            + self.coarse.len() * std::mem::size_of::<[u16; 3]>()
             + self.precomputed.as_ref().map_or(0, |p| p.memory_bytes())
     }
 
@@ -345,12 +352,13 @@ impl PhotonMap {
     }
 
     /// Position of photon `i`, quantised to 1/65535 of the map's bounds on
-    /// each axis: for the debug overlay (the exact positions live in the
-    /// tree's leaves, which kiddo does not expose).
-    pub fn coarse_position(&self, i: usize) -> Vec3A {
-        let q = self.coarse[i];
+    /// each axis, when the map was built to keep them: for the debug
+    /// overlay (the exact positions live in the tree's leaves, which kiddo
+    /// does not expose).
+    pub fn coarse_position(&self, i: usize) -> Option<Vec3A> {
+        let q = self.coarse.get(i)?;
         let t = Vec3A::new(q[0] as f32, q[1] as f32, q[2] as f32) / 65535.0;
-        self.bounds.min + (self.bounds.max - self.bounds.min) * t
+        Some(self.bounds.min + (self.bounds.max - self.bounds.min) * t)
     }
 }
 
@@ -413,11 +421,28 @@ mod tests {
         let map = PhotonMap::from_photons(&photons);
         assert_eq!(map.len(), 1000);
         let ext = map.bounds().extent();
-        for (i, p) in photons.iter().enumerate() {
-            let err = (map.coarse_position(i) - p.position).abs();
+        // The map orders its photons its own way: each coarse position is
+        // next to exactly one input photon.
+        let mut matched = vec![false; photons.len()];
+        for i in 0..map.len() {
+            let c = map.coarse_position(i).unwrap();
+            let (j, p) = photons
+                .iter()
+                .enumerate()
+                .min_by(|a, b| (a.1.position - c).length().total_cmp(&(b.1.position - c).length()))
+                .unwrap();
+            let err = (c - p.position).abs();
             assert!(err.cmple(ext / 65535.0 + Vec3A::splat(1e-6)).all());
+            assert!(!std::mem::replace(&mut matched[j], true), "photon {j} twice");
         }
         assert!((map.total_power()[0] - 1000.0).abs() < 1e-3);
-        assert!(map.memory_bytes() as f64 <= 1000.0 * BYTES_PER_PHOTON + 512.0);
+        assert!(map.memory_bytes() as f64 <= 1000.0 * (BYTES_PER_PHOTON + 6.0) + 512.0);
+        // Without the overlay's coarse positions: none kept, none counted.
+        let positions = photons.iter().map(|p| p.position.to_array()).collect();
+        let records = photons.iter().map(|p| PhotonRecord::new(p.power, p.incoming)).collect();
+        let lean = PhotonMap::build(positions, records, false);
+        assert_eq!(lean.coarse_position(0), None);
+        assert!(lean.memory_bytes() as f64 <= 1000.0 * BYTES_PER_PHOTON + 512.0);
+        assert_eq!(map.memory_bytes() - lean.memory_bytes(), 6000);
     }
 }

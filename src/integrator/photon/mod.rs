@@ -105,19 +105,22 @@ impl fmt::Display for PhotonStats {
 /// Emits `count` photons, traces them and builds the caustic map, on the
 /// current rayon pool (direct gathers: no precomputation).
 pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
-    photon_pass_with(scene, accel, count, None)
+    photon_pass_with(scene, accel, count, None, true)
 }
 
 /// [`photon_pass`], then, with `precompute`, the irradiance at the stored
 /// photons whose emission index is a multiple of [`PRECOMPUTE_STRIDE`]
 /// (emission indices are Morton-ordered strata, so these are a stratified
 /// subset), thinned further to at most `precompute.max_sites` sites
-/// (Christensen 1999; see [`precomputed`]).
+/// (Christensen 1999; see [`precomputed`]). With `keep_positions`, the map
+/// keeps coarse positions for the debug overlay
+/// ([`PhotonMap::coarse_position`]).
 pub fn photon_pass_with(
     scene: &Scene,
     accel: &dyn Accel,
     count: u64,
     precompute: Option<&Precompute>,
+    keep_positions: bool,
 ) -> (PhotonMap, PhotonStats) {
     let start = Instant::now();
     let tracer = PhotonTracer::new(scene, accel, count);
@@ -193,7 +196,7 @@ pub fn photon_pass_with(
     let trace_time = start.elapsed();
     let build_start = Instant::now();
     let stored = positions.len() as u64;
-    let mut map = PhotonMap::build(positions, records);
+    let mut map = PhotonMap::build(positions, records, keep_positions);
     let build_time = build_start.elapsed();
     let precompute_start = Instant::now();
     if let Some(pre) = precompute {
