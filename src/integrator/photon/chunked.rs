@@ -511,10 +511,11 @@ mod tests {
     use super::*;
     use crate::math::rng::{Domain, Rng};
 
-    /// The depth brings chunks to the target size, capped at 256 chunks.
+    /// Points and their order move together along the curve; ties keep
+    /// their order; scratch reuse changes nothing.
     #[test]
     fn morton_sort_orders_along_the_curve_and_keeps_ties_in_order() {
-        let mut rng = crate::math::rng::Rng::new(3, crate::math::rng::Domain::Analysis, 0, 0);
+        let mut rng = Rng::new(3, Domain::Analysis, 0, 0);
         let input: Vec<[f32; 3]> = (0..5000)
             .map(|i| {
                 if i % 10 == 0 {
@@ -551,6 +552,7 @@ mod tests {
         assert_eq!((again, again_order), (fresh, fresh_order));
     }
 
+    /// The depth brings chunks to the target size, capped at 256 chunks.
     #[test]
     fn chunk_depth_follows_the_target() {
         assert_eq!(chunk_depth(0), 0);

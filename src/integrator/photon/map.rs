@@ -273,9 +273,7 @@ impl PhotonMap {
             bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE))
         };
         let scale = Vec3A::splat(65535.0) / extent;
-        let coarse: Vec<[u16; 3]> = if !keep_coarse {
-            Vec::new()
-        } else {
+        let coarse: Vec<[u16; 3]> = if keep_coarse {
             positions
                 .par_iter()
                 .map(|p| {
@@ -285,6 +283,8 @@ impl PhotonMap {
                     [q.x as u16, q.y as u16, q.z as u16]
                 })
                 .collect()
+        } else {
+            Vec::new()
         };
         let rotation = tree_rotation();
         let mut positions = positions;
