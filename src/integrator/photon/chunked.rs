@@ -266,8 +266,7 @@ impl ChunkedTree {
             .into_par_iter()
             .zip(shares)
             .map_init(MortonScratch::default, |scratch, (mut points, (order, offset))| {
-                morton_sort(&mut points, order, scratch);
-                let (min, max) = bounds(&points);
+                let (min, max) = morton_sort(&mut points, order, scratch);
                 Chunk {
                     min,
                     max,
@@ -425,7 +424,8 @@ struct MortonScratch {
 /// bounds (10 bits per axis; ties keep their input order): kiddo's build
 /// then reads neighbouring memory at every level, and the leaves' items,
 /// hence the photon records a gather reads, are neighbours in memory.
-fn morton_sort(points: &mut [[f32; 3]], order: &mut [u32], scratch: &mut MortonScratch) {
+/// Returns the points' bounds.
+fn morton_sort(points: &mut [[f32; 3]], order: &mut [u32], scratch: &mut MortonScratch) -> Bounds {
     let (min, max) = bounds(points);
     let scale: [f32; 3] = std::array::from_fn(|a| {
         let extent = max[a] - min[a];
@@ -456,6 +456,7 @@ fn morton_sort(points: &mut [[f32; 3]], order: &mut [u32], scratch: &mut MortonS
         *p = old_points[from];
         *o = old_order[from];
     }
+    (min, max)
 }
 
 /// Sorts `keys` by their high 30 bits (stable): three passes of a
