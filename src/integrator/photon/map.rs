@@ -267,13 +267,13 @@ impl PhotonMap {
             .par_iter()
             .fold(|| Aabb::EMPTY, |b, p| b.grow(Vec3A::from_array(*p)))
             .reduce(|| Aabb::EMPTY, Aabb::union);
-        let extent = if bounds.is_empty() {
-            Vec3A::ONE
-        } else {
-            bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE))
-        };
-        let scale = Vec3A::splat(65535.0) / extent;
         let coarse: Vec<[u16; 3]> = if keep_coarse {
+            let extent = if bounds.is_empty() {
+                Vec3A::ONE
+            } else {
+                bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE))
+            };
+            let scale = Vec3A::splat(65535.0) / extent;
             positions
                 .par_iter()
                 .map(|p| {

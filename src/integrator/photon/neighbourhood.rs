@@ -162,9 +162,9 @@ const CAP_PER_K: usize = 6;
 /// The `k` nearest of `points` to `q` within `max_radius` into `out`,
 /// sorted by squared distance, then item, and how far the answer reaches:
 /// the k-th distance when `k` were found, else `max_radius` (all within it
-/// counted). Selected on [`Neighbour::order_key`]: an insertion into a sorted list per
-/// point (a mispredicted branch and a move each) took a quarter of the
-/// underwater image's time.
+/// counted). Selected on [`Neighbour::order_key`]: an insertion into a
+/// sorted list per point (a mispredicted branch and a move each) took a
+/// quarter of the underwater image's time.
 #[inline]
 fn rank(q: &[f32; 3], points: &[([f32; 3], u32)], max_radius: f32, k: NonZero<usize>, out: &mut Vec<Neighbour>) -> f32 {
     let max_r2 = max_radius * max_radius;
