@@ -267,7 +267,7 @@ impl PhotonMap {
             .par_iter()
             .fold(|| Aabb::EMPTY, |b, p| b.grow(Vec3A::from_array(*p)))
             .reduce(|| Aabb::EMPTY, Aabb::union);
-        let coarse: Vec<[u16; 3]> = if keep_coarse {
+        let coarse: Option<Vec<[u16; 3]>> = keep_coarse.then(|| {
             let extent = if bounds.is_empty() {
                 Vec3A::ONE
             } else {
@@ -283,9 +283,7 @@ impl PhotonMap {
                     [q.x as u16, q.y as u16, q.z as u16]
                 })
                 .collect()
-        } else {
-            Vec::new()
-        };
+        });
         let rotation = tree_rotation();
         let mut positions = positions;
         positions
@@ -293,7 +291,7 @@ impl PhotonMap {
             .for_each(|p| *p = to_tree(&rotation, Vec3A::from_array(*p)));
         let (tree, order) = build_tree(positions, false);
         let records = reorder(records, &order);
-        let coarse = if keep_coarse { reorder(coarse, &order) } else { coarse };
+        let coarse = coarse.map_or_else(Vec::new, |c| reorder(c, &order));
         Self {
             tree,
             rotation,

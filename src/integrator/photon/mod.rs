@@ -103,9 +103,10 @@ impl fmt::Display for PhotonStats {
 }
 
 /// Emits `count` photons, traces them and builds the caustic map, on the
-/// current rayon pool (direct gathers: no precomputation).
+/// current rayon pool (direct gathers: no precomputation; no coarse
+/// positions, as in a render without `--debug photons`).
 pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
-    photon_pass_with(scene, accel, count, None, true)
+    photon_pass_with(scene, accel, count, None, false)
 }
 
 /// [`photon_pass`], then, with `precompute`, the irradiance at the stored
