@@ -11,8 +11,13 @@
 
 pub mod accel;
 pub mod analysis;
+pub mod bsdf;
 pub mod film;
+pub mod geometry;
 pub mod integrator;
 pub mod io;
+pub mod job;
+pub mod limits;
 pub mod math;
+pub mod memory;
 pub mod scene;

@@ -4,8 +4,8 @@
 //! must now give a clean `Ok` or `Err` quickly. Names ending in `.ok` must
 //! load; every other input must be refused.
 
-use caustic::analysis::memory::MemoryBudget;
 use caustic::io::{parse_mesh_bytes, LoadLimits, MeshFormat};
+use caustic::memory::MemoryBudget;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 

@@ -1,8 +1,8 @@
 //! Mesh loading on real files: the shipped star, and the Stanford dragon from
 //! the shared assets (skipped, with a message, when absent).
 
+use caustic::geometry::generate;
 use caustic::io::{assets, load_mesh};
-use caustic::scene::generate;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 const RAYS_PER_MESH: u64 = 100_000;
 
-use caustic::scene::generate::icosphere;
+use caustic::geometry::generate::icosphere;
 
 /// Random triangles of mixed sizes, including long needles, in [-1, 1]³.
 fn soup(n: usize, seed: u64) -> Mesh {

@@ -186,8 +186,8 @@ fn more_photons_give_lower_error_against_a_reference() {
         .count();
     if std::env::var_os("CAUSTIC_TEST_PNG").is_some() {
         let st = RenderSettings::default();
-        caustic::film::write_png(std::path::Path::new("/tmp/t_ref.png"), &reference, &st).unwrap();
-        caustic::film::write_png(std::path::Path::new("/tmp/t_dark.png"), &without, &st).unwrap();
+        caustic::film::write_png(std::path::Path::new("/tmp/t_ref.png"), &reference, &st.output).unwrap();
+        caustic::film::write_png(std::path::Path::new("/tmp/t_dark.png"), &without, &st.output).unwrap();
     }
     assert!(brighter >= 4, "{brighter} pixels show a caustic");
 }

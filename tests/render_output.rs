@@ -13,7 +13,10 @@ fn small_scene() -> Scene {
             width: 37,
             height: 21,
             spp: 2,
-            exposure: 1.0,
+            output: caustic::film::OutputSettings {
+                exposure: 1.0,
+                ..Default::default()
+            },
             ..Default::default()
         },
         camera: Camera::new(Vec3A::new(0.0, 2.0, 4.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
@@ -50,7 +53,7 @@ fn rendered_film_round_trips_through_exr_and_png() {
     let dir = tempfile::tempdir().unwrap();
     let (png, exr_path) = (dir.path().join("img.png"), dir.path().join("img.exr"));
     check_writable(&png).unwrap();
-    write_png(&png, &out.film, &scene.settings).unwrap();
+    write_png(&png, &out.film, &scene.settings.output).unwrap();
     write_exr(&exr_path, &out.film).unwrap();
     let mut names: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
@@ -61,7 +64,7 @@ fn rendered_film_round_trips_through_exr_and_png() {
 
     let decoded = image::open(&png).unwrap().to_rgb8();
     assert_eq!(decoded.dimensions(), (37, 21));
-    assert_eq!(decoded.as_raw(), &tonemap_to_srgb8(&out.film, &scene.settings));
+    assert_eq!(decoded.as_raw(), &tonemap_to_srgb8(&out.film, &scene.settings.output));
 
     let read = read_first_rgba_layer_from_file(
         &exr_path,

@@ -117,7 +117,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         seed: 11,
         photons: 20_000,
         accel: "kdtree".into(),
-        fingerprint: caustic::integrator::resume::fingerprint(&scene, AccelKind::KdTree, ""),
+        fingerprint: caustic::job::fingerprint(&scene, AccelKind::KdTree, ""),
     };
     write_checkpoint(&path, &preview.accumulation, &meta).unwrap();
     let back = read_checkpoint(&path).unwrap();

@@ -112,8 +112,8 @@ fn every_documented_key_is_parsed() {
         (r.width, r.height, r.spp, r.max_depth, r.seed),
         (320, 200, 9, 6, 1234567890123)
     );
-    assert_eq!(r.tone_map, ToneMap::Clamp);
-    assert_eq!(r.exposure, -1.5);
+    assert_eq!(r.output.tone_map, ToneMap::Clamp);
+    assert_eq!(r.output.exposure, -1.5);
     assert!(close(r.ambient, Vec3A::new(0.1, 0.2, 0.3)));
     assert_eq!(r.triangle_test, TriangleTest::MollerTrumbore);
     assert_eq!(r.sharing, SampleSharing::Split);
@@ -227,8 +227,8 @@ v = [0, 0, 1]
     );
     let r = &s.settings;
     assert_eq!((r.width, r.height, r.spp, r.max_depth, r.seed), (640, 480, 1, 8, 0));
-    assert_eq!(r.tone_map, ToneMap::Aces);
-    assert_eq!(r.exposure, 0.0);
+    assert_eq!(r.output.tone_map, ToneMap::Aces);
+    assert_eq!(r.output.exposure, 0.0);
     assert_eq!(r.ambient, Vec3A::ZERO);
     assert_eq!(r.triangle_test, TriangleTest::Watertight);
     assert_eq!(r.sharing, SampleSharing::Spread);

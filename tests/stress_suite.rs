@@ -4,8 +4,8 @@
 
 use caustic::accel::{Accel, AccelStats, Hit};
 use caustic::analysis::stress::{self, Backend, Role, StressOptions, StressRow};
+use caustic::geometry::generate::icosphere;
 use caustic::math::Ray;
-use caustic::scene::generate::icosphere;
 
 fn options() -> StressOptions {
     StressOptions {

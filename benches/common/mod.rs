@@ -4,9 +4,10 @@
 
 #![allow(dead_code)] // Each bench binary uses its own part of this module.
 
+use caustic::geometry::generate;
 use caustic::io::assets;
 use caustic::math::{Transform, Vec3, Vec3A};
-use caustic::scene::{self, generate, AreaLight, Camera, Light, Material, Object, Quad, RenderSettings, Scene, Shape};
+use caustic::scene::{self, AreaLight, Camera, Light, Material, Object, Quad, RenderSettings, Scene, Shape};
 use criterion::Criterion;
 use std::path::Path;
 use std::sync::Arc;

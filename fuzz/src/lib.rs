@@ -1,6 +1,6 @@
 //! What the mesh fuzz targets share: the loader call under fixed limits.
 
-use caustic::analysis::memory::MemoryBudget;
+use caustic::memory::MemoryBudget;
 use caustic::io::{parse_mesh_bytes, LoadLimits, MeshFormat};
 
 /// Parses `data` as a mesh of `format` (gzip included: inputs starting with

@@ -11,26 +11,11 @@ pub mod embree;
 pub mod kdtree;
 pub mod triangle;
 
+pub use crate::geometry::{Hit, TriangleTest};
 use crate::math::Ray;
 use crate::scene::Scene;
 use std::time::Duration;
 use thiserror::Error;
-
-/// The closest hit of a ray. Surface data is computed afterwards from the
-/// scene (`Scene::surface_interaction`), so every backend agrees on this alone.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Ray parameter of the hit (world space; `origin + t·dir`).
-    pub t: f32,
-    /// Object index (`Scene::objects`).
-    pub instance: u32,
-    /// Triangle index within the object's mesh; 0 for analytic shapes.
-    pub prim: u32,
-    /// Barycentric `u` (weight of the triangle's second vertex) or the quad's first coordinate.
-    pub u: f32,
-    /// Barycentric `v` (weight of the third vertex) or the quad's second coordinate.
-    pub v: f32,
-}
 
 /// A ray-query accelerator.
 pub trait Accel: Send + Sync {
@@ -73,6 +58,13 @@ impl AccelKind {
         }
     }
 
+    /// The kind named `name` (as on the command line), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [AccelKind::Embree, AccelKind::KdTree, AccelKind::Brute]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
+
     /// The default: Embree when compiled in, else the KD-tree.
     pub fn default_kind() -> Self {
         if cfg!(feature = "embree") {
@@ -81,16 +73,6 @@ impl AccelKind {
             AccelKind::KdTree
         }
     }
-}
-
-/// Ray–triangle intersection test used by the in-house backends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum TriangleTest {
-    /// Watertight test (Woop, Benthin, Wald 2013): no ray slips between
-    /// triangles that share an edge.
-    Watertight,
-    /// Möller–Trumbore 1997 (the original report's choice).
-    MollerTrumbore,
 }
 
 /// Statistics reported by `caustic info` and the benchmarks.
@@ -141,6 +123,17 @@ impl Default for AccelOptions {
             triangle_test: TriangleTest::Watertight,
             embree_quality: "high".into(),
             embree_robust: false,
+        }
+    }
+}
+
+impl AccelOptions {
+    /// The options that change `kind`'s answers, as text for a render's
+    /// fingerprint (the triangle test is part of the scene's settings).
+    pub fn fingerprint_text(&self, kind: AccelKind) -> String {
+        match kind {
+            AccelKind::Embree => format!("quality {:?} robust {}", self.embree_quality, self.embree_robust),
+            _ => String::new(),
         }
     }
 }

@@ -27,10 +27,10 @@
 //!   photon pass included; its Mrays/s counts every ray the render cast
 //!   (camera, shadow, secondary and photon rays) over its wall time.
 
-use super::memory;
 use super::rays::{self, Query, RayKind, RaySet};
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions};
 use crate::integrator::{self, RenderPlan};
+use crate::memory;
 use crate::scene::{self, Scene, SceneError};
 use serde::Serialize;
 use std::fmt;
@@ -394,10 +394,10 @@ fn check_options(options: &BenchOptions) -> Result<(), BenchError> {
         )));
     }
     let r = &options.render;
-    scene::load::check_image_limits(r.width, r.height, r.spp)
+    crate::limits::check_image_limits(r.width, r.height, r.spp)
         .map_err(|e| BenchError::Options(format!("full render: {e}")))?;
     if let Some(n) = r.photons {
-        scene::load::check_photon_count(n).map_err(|e| BenchError::Options(format!("--photons: {e}")))?;
+        crate::limits::check_photon_count(n).map_err(|e| BenchError::Options(format!("--photons: {e}")))?;
     }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! Measurements over the renderer's components: [`crosscheck`], which casts
 //! seeded rays through two accelerators and reports where they disagree,
-//! [`memory`], the process's peak memory for reports, [`rays`], seeded ray
+//! [`rays`], seeded ray
 //! sets and their timed queries, [`bench`], `caustic bench`, [`converge`],
 //! run time against error over increasing budgets (with its log-log
 //! [`plot`]), and [`stress`], the numerical stress cases (`caustic stress`).
@@ -8,7 +8,6 @@
 pub mod bench;
 pub mod converge;
 pub mod crosscheck;
-pub mod memory;
 pub mod plot;
 pub mod rays;
 pub mod stress;

@@ -1,6 +1,6 @@
 //! Seeded ray sets of the three kinds a renderer casts, and a timed run of a
 //! set through any [`Accel`]: the kernels of `caustic bench`
-//! ([`super::bench`]), of the Criterion benches in `benches/` and of the
+//! (`analysis::bench`), of the Criterion benches in `benches/` and of the
 //! `#[ignore]`d throughput tests.
 //!
 //! * **camera**: primary rays of the scene camera, one jittered sample per

@@ -15,7 +15,7 @@
 //! `caustic.width`, `caustic.height`, `caustic.spp`, `caustic.seed`,
 //! `caustic.photons`, `caustic.accel` and `caustic.fingerprint` (all text;
 //! the fingerprint is a SHA-256 of the scene and every setting that changes
-//! the samples, see `integrator::resume::fingerprint`). The file is written
+//! the samples, see `job::fingerprint`). The file is written
 //! atomically (temporary file, fsync, rename), like the images.
 
 use super::accum::Accumulation;
@@ -145,7 +145,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         hs => return Err(invalid(format!("{} layers, expected 1", hs.len()))),
     };
     let meta = parse_meta(&header.own_attributes.other).map_err(invalid)?;
-    if let Err(e) = crate::scene::load::check_image_limits(meta.width, meta.height, meta.spp) {
+    if let Err(e) = crate::limits::check_image_limits(meta.width, meta.height, meta.spp) {
         return Err(invalid(format!("recorded image size: {e}")));
     }
     let size = (meta.width as usize, meta.height as usize);

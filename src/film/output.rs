@@ -3,9 +3,8 @@
 //! target, so a crash or a full disk never leaves a truncated image behind and
 //! readers see either the old file or the new one.
 
-use super::tonemap::tonemap_to_srgb8;
+use super::tonemap::{tonemap_to_srgb8, OutputSettings};
 use super::Film;
-use crate::scene::RenderSettings;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -127,7 +126,7 @@ pub(crate) fn write_atomically(
 
 /// Writes the tone-mapped film as an 8-bit sRGB PNG (tone curve and exposure
 /// from `settings`), atomically.
-pub fn write_png(path: &Path, film: &Film, settings: &RenderSettings) -> Result<(), OutputError> {
+pub fn write_png(path: &Path, film: &Film, settings: &OutputSettings) -> Result<(), OutputError> {
     use image::ImageEncoder;
     let bytes = tonemap_to_srgb8(film, settings);
     write_atomically(path, |w| {
@@ -189,8 +188,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.png");
         std::fs::write(&path, b"old contents").unwrap();
-        let settings = RenderSettings {
-            tone_map: crate::scene::ToneMap::Clamp,
+        let settings = OutputSettings {
+            tone_map: super::super::ToneMap::Clamp,
             ..Default::default()
         };
         write_png(&path, &test_film(), &settings).unwrap();
@@ -233,7 +232,7 @@ mod tests {
         let missing = dir.path().join("no/such/dir/out.png");
         let e = check_writable(&missing).unwrap_err().to_string();
         assert!(e.contains("no/such/dir/out.png"), "{e}");
-        let e = write_png(&missing, &test_film(), &RenderSettings::default())
+        let e = write_png(&missing, &test_film(), &OutputSettings::default())
             .unwrap_err()
             .to_string();
         assert!(e.contains("out.png"), "{e}");

@@ -3,7 +3,6 @@
 
 use super::Film;
 use crate::math::{Mat3A, Vec3, Vec3A};
-use crate::scene::{RenderSettings, ToneMap};
 
 /// sRGB (linear, D65) → the ACES fit's working space: Stephen Hill's
 /// `ACESInputMat` (sRGB → XYZ → D65→D60 → AP1 → RRT_SAT), from his fit
@@ -78,9 +77,30 @@ pub fn encode_srgb8(c: Vec3) -> [u8; 3] {
     [q(c.x), q(c.y), q(c.z)]
 }
 
+/// Tone mapping applied before 8-bit output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ToneMap {
+    /// ACES filmic curve.
+    #[default]
+    Aces,
+    /// Clamp to [0, 1].
+    Clamp,
+}
+
+/// How the linear film becomes a displayable image (the scene's
+/// `tone_map` and `exposure`): display only, never part of a render's
+/// fingerprint.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutputSettings {
+    /// Tone curve for 8-bit output.
+    pub tone_map: ToneMap,
+    /// Exposure in stops (scales linear radiance by 2^exposure before tone mapping).
+    pub exposure: f32,
+}
+
 /// The whole film as interleaved 8-bit sRGB, with the settings' tone
 /// mapping and exposure.
-pub fn tonemap_to_srgb8(film: &Film, settings: &RenderSettings) -> Vec<u8> {
+pub fn tonemap_to_srgb8(film: &Film, settings: &OutputSettings) -> Vec<u8> {
     film.pixels
         .iter()
         .flat_map(|&p| encode_srgb8(tone_map(p, settings.tone_map, settings.exposure)))

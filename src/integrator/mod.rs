@@ -1,13 +1,12 @@
 //! Integrators: the render plan, the photon pass (caustics), fog, the
-//! Whitted integrator, the progressive deterministic render loop, interrupt
-//! and resume support, and the debug overlays.
+//! Whitted integrator, the progressive deterministic render loop and the
+//! debug overlays.
 
 pub mod debug;
 pub mod fog;
 pub mod photon;
 pub mod plan;
 pub mod render;
-pub mod resume;
 pub mod whitted;
 
 pub use plan::RenderPlan;

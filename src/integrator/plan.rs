@@ -83,7 +83,7 @@ pub enum PhotonPlan {
         /// Cone-filter constant.
         cone_k: f32,
         /// How shading points evaluate the estimate.
-        gather: super::photon::GatherMode,
+        gather: crate::scene::GatherMode,
     },
     /// No object is a mirror or dielectric: there is no caustic.
     NoSpecularCaster,
@@ -262,71 +262,115 @@ pub fn default_gather_radius(scene: &Scene) -> f32 {
     }
 }
 
-impl fmt::Display for RenderPlan {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let pixels = self.width as u64 * self.height as u64;
-        writeln!(f, "render plan:")?;
-        writeln!(
-            f,
-            "  camera rays: ran, {}x{} pixels x {} spp = {} rays (seed {})",
-            self.width,
-            self.height,
-            self.spp,
-            pixels * self.spp as u64,
-            self.seed
-        )?;
-        if self.ambient {
-            writeln!(f, "  ambient term: ran")?;
-        } else {
-            writeln!(f, "  ambient term: skipped (scene ambient light is black)")?;
+/// Whether a stage of the render runs, and why or how.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StageStatus {
+    /// The stage runs; how.
+    Ran(String),
+    /// The stage is skipped; why.
+    Skipped(String),
+}
+
+/// One stage of the render plan, as `caustic info` and `caustic render` report it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Stage {
+    /// What the stage is ("photon pass", "light 0 (area)", ...).
+    pub name: String,
+    /// Whether it runs.
+    pub status: StageStatus,
+}
+
+impl Stage {
+    fn ran(name: impl Into<String>, how: String) -> Self {
+        Self {
+            name: name.into(),
+            status: StageStatus::Ran(how),
         }
+    }
+
+    fn skipped(name: impl Into<String>, why: &str) -> Self {
+        Self {
+            name: name.into(),
+            status: StageStatus::Skipped(why.to_string()),
+        }
+    }
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.status {
+            StageStatus::Ran(how) if how.is_empty() => write!(f, "{}: ran", self.name),
+            StageStatus::Ran(how) => write!(f, "{}: ran, {how}", self.name),
+            StageStatus::Skipped(why) => write!(f, "{}: skipped ({why})", self.name),
+        }
+    }
+}
+
+impl RenderPlan {
+    /// Every stage, in the order the render meets them.
+    pub fn stages(&self) -> Vec<Stage> {
+        let pixels = self.width as u64 * self.height as u64;
+        let mut stages = vec![Stage::ran(
+            "camera rays",
+            format!(
+                "{}x{} pixels x {} spp = {} rays (seed {})",
+                self.width,
+                self.height,
+                self.spp,
+                pixels * self.spp as u64,
+                self.seed
+            ),
+        )];
+        stages.push(if self.ambient {
+            Stage::ran("ambient term", String::new())
+        } else {
+            Stage::skipped("ambient term", "scene ambient light is black")
+        });
         if self.lights.is_empty() {
-            writeln!(f, "  direct light and shadow rays: skipped (no lights)")?;
+            stages.push(Stage::skipped("direct light and shadow rays", "no lights"));
         }
         for l in &self.lights {
-            match l.shadow {
-                ShadowSampling::Hard => writeln!(
-                    f,
-                    "  light {} (point): ran, hard shadow, 1 shadow ray per shading point",
-                    l.index
-                )?,
+            stages.push(match l.shadow {
+                ShadowSampling::Hard => Stage::ran(
+                    format!("light {} (point)", l.index),
+                    "hard shadow, 1 shadow ray per shading point".into(),
+                ),
                 ShadowSampling::Stratified {
                     strata,
                     grid,
                     rays_per_sample,
-                } => {
+                } => Stage::ran(
+                    format!("light {} (area)", l.index),
                     if self.spread() {
-                        writeln!(
-                            f,
-                            "  light {} (area): ran, soft shadow, {strata} stratified jittered shadow rays \
-                             per pixel ({}x{} strata) spread over {} samples, at most {rays_per_sample} per sample",
-                            l.index, grid.0, grid.1, self.spp
-                        )?
+                        format!(
+                            "soft shadow, {strata} stratified jittered shadow rays per pixel ({}x{} strata) \
+                             spread over {} samples, at most {rays_per_sample} per sample",
+                            grid.0, grid.1, self.spp
+                        )
                     } else {
-                        writeln!(
-                            f,
-                            "  light {} (area): ran, soft shadow, {strata} stratified jittered shadow rays \
-                             per shading point ({}x{} strata)",
-                            l.index, grid.0, grid.1
-                        )?
-                    }
-                }
-            }
+                        format!(
+                            "soft shadow, {strata} stratified jittered shadow rays per shading point ({}x{} strata)",
+                            grid.0, grid.1
+                        )
+                    },
+                ),
+            });
         }
-        match self.secondary {
+        stages.push(match self.secondary {
             Secondary::Traced {
                 specular_objects,
                 dielectric_objects,
-            } => writeln!(
-                f,
-                "  secondary rays: ran, {specular_objects} mirror/glass object(s) \
-                 ({dielectric_objects} refracting), depth limit {}",
-                self.max_depth
-            )?,
-            Secondary::NoSpecularObject => writeln!(f, "  secondary rays: skipped (no mirror or dielectric object)")?,
-            Secondary::DepthZero => writeln!(f, "  secondary rays: skipped (max depth is 0)")?,
-        }
-        match self.photons {
+            } => Stage::ran(
+                "secondary rays",
+                format!(
+                    "{specular_objects} mirror/glass object(s) ({dielectric_objects} refracting), depth limit {}",
+                    self.max_depth
+                ),
+            ),
+            Secondary::NoSpecularObject => Stage::skipped("secondary rays", "no mirror or dielectric object"),
+            Secondary::DepthZero => Stage::skipped("secondary rays", "max depth is 0"),
+        });
+        stages.push(match self.photons {
             PhotonPlan::Run {
                 count,
                 casters,
@@ -334,34 +378,56 @@ impl fmt::Display for RenderPlan {
                 max_radius,
                 cone_k,
                 gather,
-            } => writeln!(
-                f,
-                "  photon pass: ran, {count} photons, emission restricted to {casters} specular caster(s); \
-                 gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}, {gather}"
-            )?,
-            PhotonPlan::NoSpecularCaster => writeln!(f, "  photon pass: skipped (no specular caster)")?,
-            PhotonPlan::NoLights => writeln!(f, "  photon pass: skipped (no lights)")?,
-            PhotonPlan::DepthZero => writeln!(f, "  photon pass: skipped (max depth is 0)")?,
-            PhotonPlan::CountZero => writeln!(f, "  photon pass: skipped (photon count is 0)")?,
-        }
-        match self.fog {
-            FogPlan::Run { density } => writeln!(f, "  fog: ran, density {density} per unit length inside the water")?,
-            FogPlan::NoMedium => writeln!(f, "  fog: skipped (no medium)")?,
-        }
-        match self.sharing {
-            Sharing::Spread => writeln!(
-                f,
-                "  sample spreading: ran (area-light strata shared out over the pixel's samples; \
-                 one Fresnel-weighted branch per sample at dielectrics, the first stratified over the pixel)"
+            } => Stage::ran(
+                "photon pass",
+                format!(
+                    "{count} photons, emission restricted to {casters} specular caster(s); \
+                     gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}, {gather}"
+                ),
             ),
-            Sharing::SplitRequested => writeln!(
-                f,
-                "  sample spreading: skipped (sharing = split: every sample casts all shadow rays and follows both branches)"
-            ),
-            Sharing::SplitSingleSample => {
-                writeln!(f, "  sample spreading: skipped (1 sample per pixel: full splitting)")
+            PhotonPlan::NoSpecularCaster => Stage::skipped("photon pass", "no specular caster"),
+            PhotonPlan::NoLights => Stage::skipped("photon pass", "no lights"),
+            PhotonPlan::DepthZero => Stage::skipped("photon pass", "max depth is 0"),
+            PhotonPlan::CountZero => Stage::skipped("photon pass", "photon count is 0"),
+        });
+        stages.push(match self.fog {
+            FogPlan::Run { density } => {
+                Stage::ran("fog", format!("density {density} per unit length inside the water"))
             }
+            FogPlan::NoMedium => Stage::skipped("fog", "no medium"),
+        });
+        stages.push(match self.sharing {
+            Sharing::Spread => Stage::ran(
+                "sample spreading",
+                "area-light strata shared out over the pixel's samples; one Fresnel-weighted branch per sample \
+                 at dielectrics, the first stratified over the pixel"
+                    .into(),
+            ),
+            Sharing::SplitRequested => Stage::skipped(
+                "sample spreading",
+                "sharing = split: every sample casts all shadow rays and follows both branches",
+            ),
+            Sharing::SplitSingleSample => Stage::skipped("sample spreading", "1 sample per pixel: full splitting"),
+        });
+        stages
+    }
+
+    /// The stages that do not run, with the reason.
+    pub fn skipped(&self) -> Vec<Stage> {
+        self.stages()
+            .into_iter()
+            .filter(|s| matches!(s.status, StageStatus::Skipped(_)))
+            .collect()
+    }
+}
+
+impl fmt::Display for RenderPlan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "render plan:")?;
+        for stage in self.stages() {
+            writeln!(f, "  {stage}")?;
         }
+        Ok(())
     }
 }
 

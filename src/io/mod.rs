@@ -10,9 +10,9 @@ pub mod off;
 pub mod ply;
 mod source;
 
-use crate::analysis::memory::MemoryBudget;
-use crate::scene::mesh::MeshDataError;
-use crate::scene::Mesh;
+use crate::geometry::Mesh;
+use crate::geometry::MeshDataError;
+use crate::memory::MemoryBudget;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -110,14 +110,14 @@ pub struct LoadLimits {
 
 impl Default for LoadLimits {
     /// 8 GiB of input, 2^28 vertices or faces (about 6 GiB of vertex and index
-    /// data), and the memory budget of [`crate::analysis::memory::budget`]
+    /// data), and the memory budget of [`crate::memory::budget`]
     /// (`CAUSTIC_MEMORY_LIMIT`, else the kernel's `MemAvailable`; an
     /// unparsable variable is reported by the CLI at start-up).
     fn default() -> Self {
         Self {
             max_input_bytes: 8 << 30,
             max_elements: 1 << 28,
-            memory: crate::analysis::memory::budget().ok().flatten(),
+            memory: crate::memory::budget().ok().flatten(),
         }
     }
 }
@@ -153,7 +153,7 @@ pub(crate) fn check_mesh_memory(
             format!(
                 "{vertices} vertices and {faces} faces need about {} of memory ({MESH_BYTES_PER_VERTEX} bytes \
                  per vertex, {MESH_BYTES_PER_TRIANGLE} per triangle with its KD-tree), {}",
-                crate::analysis::memory::format_bytes(u64::try_from(need).unwrap_or(u64::MAX)),
+                crate::memory::format_bytes(u64::try_from(need).unwrap_or(u64::MAX)),
                 budget
             ),
         ));

@@ -8,8 +8,8 @@
 
 use super::source::{parse_f32, parse_i64, Source};
 use super::{LoadLimits, ParseError, Place};
+use crate::geometry::Mesh;
 use crate::math::Vec3;
-use crate::scene::Mesh;
 use std::collections::HashMap;
 use std::io::Read;
 

@@ -12,8 +12,8 @@
 
 use super::source::{parse_f32, parse_i64, show, Source};
 use super::{bounded_capacity, fan, LoadLimits, ParseError, Place};
+use crate::geometry::Mesh;
 use crate::math::Vec3;
-use crate::scene::Mesh;
 
 /// Largest polygon accepted (vertices per face).
 pub const MAX_POLYGON: u64 = 1 << 16;

@@ -1,8 +1,8 @@
 //! The scene file format: serde structs that mirror the TOML file one to one
 //! (documented key by key in `docs/scene-format.md`).
 //!
-//! Nothing here is validated beyond types: [`super::load`] turns a
-//! [`SceneDesc`] into a [`super::Scene`] and checks every value. Fields whose
+//! Nothing here is validated beyond types: `scene::load` turns a
+//! [`SceneDesc`] into a `Scene` and checks every value. Fields whose
 //! value can be wrong (a negative radius, an unknown material) are kept as
 //! [`Spanned`] so that the error can point at the offending value by line and
 //! column. Every table rejects unknown keys (`deny_unknown_fields`).

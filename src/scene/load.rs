@@ -15,13 +15,15 @@ use super::desc::{
     CameraDesc, LightDesc, LightKind, MaterialDesc, MediumDesc, ModelName, ObjectDesc, ObjectKind, PhotonsDesc,
     RenderDesc, ScaleDesc, SceneDesc, SharingName, Spanned, ToneMapName, TriangleTestName, Vec2Desc, Vec3Desc,
 };
-use super::water::{WaterSurface, Wave, MAX_WATER_RESOLUTION};
 use super::{
     AreaLight, Camera, Dielectric, Light, Material, Medium, Mesh, Mirror, Object, PhotonSettings, Quad, RenderSettings,
-    SampleSharing, Scene, ShadingModel, Shape, Sphere, ToneMap,
+    SampleSharing, Scene, ShadingModel, Shape, Sphere,
 };
-use crate::accel::TriangleTest;
+use crate::film::{OutputSettings, ToneMap};
+use crate::geometry::water::{WaterSurface, Wave, MAX_WATER_RESOLUTION};
+use crate::geometry::TriangleTest;
 use crate::io::MeshError;
+use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{Transform, Vec3, Vec3A};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
@@ -35,19 +37,6 @@ use thiserror::Error;
 /// Largest scene file read (bytes). Scene files are small text; the bound
 /// keeps a wrong path (`/dev/zero`, a huge binary) from exhausting memory.
 pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
-/// Largest image width or height.
-pub const MAX_IMAGE_SIDE: u32 = 65536;
-/// Largest `width × height × spp` (camera samples of one render).
-pub const MAX_CAMERA_SAMPLES: u64 = 1 << 40;
-/// Most samples per pixel (2^20): beyond it a render never ends in practice,
-/// whatever the image size.
-pub const MAX_SPP: u32 = 1 << 20;
-/// Film memory budgeted per pixel (linear RGB sums and sums of squares in
-/// f64 plus a sample count, rounded up): used to refuse images whose film
-/// alone could not be allocated.
-pub const FILM_BYTES_PER_PIXEL: u64 = 64;
-/// Largest film memory accepted (bytes): 16 GiB, i.e. 268 million pixels.
-pub const MAX_FILM_BYTES: u64 = 16 << 30;
 /// Largest `max_depth`.
 pub const MAX_DEPTH: u32 = 64;
 /// Largest number of shadow samples of one area light.
@@ -225,97 +214,10 @@ impl SceneError {
     }
 }
 
-/// An image size beyond the limits (memory is checked before any allocation).
-#[derive(Debug, Error, PartialEq)]
-pub enum ImageLimit {
-    /// The film would not fit the memory limit.
-    #[error("{0}")]
-    Film(String),
-    /// Too many camera samples.
-    #[error("{0}")]
-    Samples(String),
-}
-
-/// Checks `width × height × spp` against the film-memory and sample limits;
-/// shared by the scene loader and the CLI's overrides.
-pub fn check_image_limits(width: u32, height: u32, spp: u32) -> Result<(), ImageLimit> {
-    if spp > MAX_SPP {
-        return Err(ImageLimit::Samples(format!(
-            "{spp} spp: at most {MAX_SPP} samples per pixel"
-        )));
-    }
-    if width == 0 || height == 0 || spp == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
-        return Err(ImageLimit::Film(format!(
-            "{width}×{height} pixels, {spp} spp: width and height must be in 1..={MAX_IMAGE_SIDE} and spp ≥ 1"
-        )));
-    }
-    let pixels = width as u64 * height as u64;
-    let film_bytes = pixels * FILM_BYTES_PER_PIXEL;
-    if film_bytes > MAX_FILM_BYTES {
-        return Err(ImageLimit::Film(format!(
-            "{width}×{height} pixels need {:.1} GiB of film ({FILM_BYTES_PER_PIXEL} bytes per pixel), \
-             more than the {} GiB limit",
-            film_bytes as f64 / (1u64 << 30) as f64,
-            MAX_FILM_BYTES >> 30
-        )));
-    }
-    // Before allocating: the film must fit the memory budget (CAUSTIC_MEMORY_LIMIT or MemAvailable).
-    if let Ok(Some(budget)) = crate::analysis::memory::budget() {
-        if film_bytes > budget.bytes {
-            return Err(ImageLimit::Film(format!(
-                "{width}×{height} pixels need {} of film ({FILM_BYTES_PER_PIXEL} bytes per pixel), {budget}",
-                crate::analysis::memory::format_bytes(film_bytes)
-            )));
-        }
-    }
-    let samples = pixels * spp as u64;
-    if samples > MAX_CAMERA_SAMPLES {
-        return Err(ImageLimit::Samples(format!(
-            "{width}×{height} pixels × {spp} spp = {samples} camera samples, more than the limit of 2^40"
-        )));
-    }
-    Ok(())
-}
-
-/// Largest photon count: photon indices are u32 in the k-d tree.
-pub const MAX_PHOTONS: u64 = u32::MAX as u64;
 /// Largest `k` of the photon gather.
 pub const MAX_PHOTON_GATHER: u32 = 100_000;
 /// Default water grid resolution (cells per side).
 pub const DEFAULT_WATER_RESOLUTION: u32 = 256;
-
-/// Available memory in bytes (`MemAvailable` of /proc/meminfo), when known.
-pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// Checks a photon count against [`MAX_PHOTONS`] and against the memory
-/// available now (the photon map's peak while it is built,
-/// `PEAK_BYTES_PER_PHOTON` per photon, must fit); shared by the loader and
-/// the CLI's `--photons`.
-pub fn check_photon_count(count: u64) -> Result<(), String> {
-    if count > MAX_PHOTONS {
-        return Err(format!(
-            "{count} photons: at most {MAX_PHOTONS} (photon indices are 32-bit)"
-        ));
-    }
-    let per = crate::integrator::photon::PEAK_BYTES_PER_PHOTON;
-    let needed = count.saturating_mul(per);
-    if let Some(available) = available_memory() {
-        if needed > available {
-            return Err(format!(
-                "{count} photons need up to {:.1} GiB while the photon map is built ({per} bytes per photon), \
-                 but only {:.1} GiB of memory is available",
-                needed as f64 / (1u64 << 30) as f64,
-                available as f64 / (1u64 << 30) as f64
-            ));
-        }
-    }
-    Ok(())
-}
 
 /// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
 /// Relative mesh paths are resolved against the scene file's directory.
@@ -573,7 +475,7 @@ impl Ctx<'_> {
             return Err(self.invalid(span, e.to_string()));
         }
         let exposure = match &r.exposure {
-            None => d.exposure,
+            None => d.output.exposure,
             Some(s) => {
                 let e = self.number(s, "exposure")?;
                 if f64::from(e).abs() > MAX_EXPOSURE_STOPS {
@@ -595,12 +497,14 @@ impl Ctx<'_> {
             spp,
             max_depth,
             seed: r.seed.unwrap_or(d.seed),
-            tone_map: match r.tone_map {
-                None => d.tone_map,
-                Some(ToneMapName::Aces) => ToneMap::Aces,
-                Some(ToneMapName::Clamp) => ToneMap::Clamp,
+            output: OutputSettings {
+                tone_map: match r.tone_map {
+                    None => d.output.tone_map,
+                    Some(ToneMapName::Aces) => ToneMap::Aces,
+                    Some(ToneMapName::Clamp) => ToneMap::Clamp,
+                },
+                exposure,
             },
-            exposure,
             ambient,
             triangle_test: match r.triangle_test {
                 None => d.triangle_test,

@@ -4,34 +4,23 @@
 
 pub mod camera;
 pub mod desc;
-pub mod generate;
 pub mod light;
 pub mod load;
 pub mod material;
-pub mod mesh;
-pub mod shape;
-pub mod water;
+pub mod medium;
 
-use crate::accel::{Hit, TriangleTest};
+pub use crate::film::{OutputSettings, ToneMap};
+use crate::geometry::{Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3A};
 use std::sync::Arc;
 
+pub use crate::geometry::{Mesh, Quad, Sphere};
+pub use crate::geometry::{WaterSurface, Wave};
 pub use camera::Camera;
 pub use light::{AreaLight, Light};
 pub use load::{load_scene, parse_scene, SceneError};
 pub use material::{Dielectric, Material, Mirror, ShadingModel};
-pub use mesh::Mesh;
-pub use shape::{Quad, Sphere};
-pub use water::{Medium, WaterSurface, Wave};
-
-/// Tone mapping applied before 8-bit output.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ToneMap {
-    /// ACES filmic curve.
-    Aces,
-    /// Clamp to [0, 1].
-    Clamp,
-}
+pub use medium::Medium;
 
 /// How secondary work is shared between a pixel's samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,10 +45,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Seed of every random stream.
     pub seed: u64,
-    /// Tone mapping for the PNG.
-    pub tone_map: ToneMap,
-    /// Exposure in stops (scales linear radiance by 2^exposure before tone mapping).
-    pub exposure: f32,
+    /// Tone mapping and exposure of the 8-bit output.
+    pub output: OutputSettings,
     /// Ambient light (multiplied by each material's ambient colour).
     pub ambient: Vec3A,
     /// Ray–triangle test.
@@ -122,8 +109,7 @@ impl Default for RenderSettings {
             spp: 1,
             max_depth: 8,
             seed: 0,
-            tone_map: ToneMap::Aces,
-            exposure: 0.0,
+            output: OutputSettings::default(),
             ambient: Vec3A::ZERO,
             triangle_test: TriangleTest::Watertight,
             sharing: SampleSharing::Spread,

@@ -8,7 +8,7 @@ use caustic::math::{Ray, Transform, Vec3, Vec3A};
 use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
 use std::sync::Arc;
 
-pub use caustic::scene::generate::icosphere;
+pub use caustic::geometry::generate::icosphere;
 
 /// `n` random triangles in the box [-1, 1]³ (overlapping, of all shapes).
 pub fn soup(n: usize, seed: u64) -> Mesh {

@@ -25,8 +25,8 @@ use super::{box_mesh, Backend, Role, StressOptions, StressRow, Tally};
 use super::{guarded, scene_of, share, tally, trial_rng, unavailable_row};
 use crate::accel::kdtree::KdTreeAccel;
 use crate::accel::{AccelOptions, Hit, TriangleTest};
+use crate::geometry::generate::{cornell_star, grid, heightfield, icosphere};
 use crate::math::{Aabb, Ray, Rng, Transform, Vec3, Vec3A};
-use crate::scene::generate::{cornell_star, grid, heightfield, icosphere};
 use crate::scene::{Quad, Scene, Shape, Sphere};
 use std::sync::Arc;
 

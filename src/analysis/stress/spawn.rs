@@ -81,9 +81,10 @@
 use super::{box_mesh, Backend, Role, StressOptions, StressRow, Tally};
 use super::{guarded, log_uniform, random_unit, scene_of, share, tally, trial_rng, unavailable_row};
 use crate::accel::{Accel, Hit};
-use crate::integrator::whitted::{DielectricInterface, SHADOW_EPSILON};
+use crate::bsdf::DielectricInterface;
+use crate::geometry::generate::{icosphere, torus};
+use crate::integrator::whitted::SHADOW_EPSILON;
 use crate::math::{offset_ray_origin, Ray, Rng, Transform, Vec3, Vec3A};
-use crate::scene::generate::{icosphere, torus};
 use crate::scene::{Quad, Scene, Shape, Sphere, SurfaceInteraction};
 use glam::DVec3;
 use std::sync::Arc;

@@ -33,12 +33,13 @@
 use super::{box_mesh, guarded, random_unit, scene_of, share, tally, trial_rng, unavailable_row};
 use super::{Backend, Role, StressOptions, StressRow, Tally};
 use crate::accel::{self, Accel, AccelKind, AccelOptions};
+use crate::bsdf::DielectricInterface;
+use crate::geometry::generate::icosphere;
 use crate::integrator::photon::SiteCache;
 use crate::integrator::render::render;
-use crate::integrator::whitted::{DielectricInterface, SampleContext, Whitted};
+use crate::integrator::whitted::{SampleContext, Whitted};
 use crate::integrator::{RayCounts, RenderPlan};
 use crate::math::{offset_ray_origin, Ray, Rng, Transform, Vec3, Vec3A};
-use crate::scene::generate::icosphere;
 use crate::scene::{Dielectric, Light, Material, Object, Scene, Shape, Sphere};
 use std::path::Path;
 use std::sync::Arc;

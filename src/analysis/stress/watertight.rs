@@ -24,9 +24,9 @@
 
 use super::{guarded, log_uniform, random_unit, scene_of, share, tally, trial_rng, unavailable_row};
 use super::{Backend, Role, StressOptions, StressRow, Tally};
+use crate::geometry::generate::{icosphere, torus};
 use crate::io::{self, assets};
 use crate::math::{Ray, Transform, Vec3A};
-use crate::scene::generate::{icosphere, torus};
 use crate::scene::{Mesh, Shape};
 use rayon::prelude::*;
 use std::collections::HashMap;

@@ -47,8 +47,8 @@
 
 use super::map::Photon;
 use crate::accel::{Accel, Hit};
+use crate::bsdf::{fresnel_schlick, reflect, DielectricInterface};
 use crate::integrator::fog;
-use crate::integrator::whitted::{fresnel_schlick, reflect, DielectricInterface};
 use crate::math::rng::{Domain, Rng};
 use crate::math::sampling::{cosine_hemisphere, morton_stratified, uniform_cone, uniform_sphere};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};

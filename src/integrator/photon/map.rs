@@ -51,12 +51,7 @@ pub const BUCKET: usize = 64;
 /// Bytes held per stored photon once the map is built (see the module docs).
 pub const BYTES_PER_PHOTON: f64 = 12.0 + 4.0 + 4.0 + 4.0 + 12.0 / BUCKET as f64;
 
-/// Bytes per photon at the peak of the build, rounded up: the chunks'
-/// positions (12), kiddo's leaves and `usize` sort index (24), the chunk
-/// order (4), records (8) and, for the debug overlay, coarse positions
-/// (6), plus slack for the reordering of records and coarse positions
-/// that follows.
-pub const PEAK_BYTES_PER_PHOTON: u64 = 56;
+pub use crate::limits::PEAK_BYTES_PER_PHOTON;
 
 /// The k-d tree type: f32 coordinates, u32 photon indices, 3-D.
 pub type PhotonTree = ImmutableKdTree<f32, u32, 3, BUCKET>;

@@ -1,7 +1,6 @@
 //! Procedural water: a height field made of a sum of sine waves (the
 //! original report's "eau procédurale", §5.3), turned into a triangle mesh
-//! with analytic normals, and the participating medium (fog) that fills the
-//! water below it.
+//! with analytic normals.
 
 use super::mesh::{Mesh, MeshDataError};
 use crate::math::{Aabb, Vec2, Vec3, Vec3A};
@@ -116,25 +115,6 @@ impl WaterSurface {
             Vec3A::new(hi.x, self.center.y, hi.z),
         )
     }
-}
-
-/// A homogeneous participating medium approximated by exponential fog
-/// (the original report's "brouillard", §5.3): along a path of length `d`
-/// inside `region`, radiance becomes `T·L + (1 − T)·colour` with
-/// transmittance `T = exp(−density · d)`.
-///
-/// Simplification: the region is a box (the water's (x, z) extent, from
-/// the bottom of the scene up to the *mean* water level), not the volume
-/// under the wavy surface itself; crests and troughs shift the true boundary
-/// by at most the waves' amplitude.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Medium {
-    /// Extinction per unit length (≥ 0).
-    pub density: f32,
-    /// Colour the fog tends to (in-scattered radiance).
-    pub colour: Vec3A,
-    /// The box the medium fills.
-    pub region: Aabb,
 }
 
 #[cfg(test)]

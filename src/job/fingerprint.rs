@@ -1,11 +1,5 @@
-//! Long renders: stopping on Ctrl-C and resuming from a checkpoint.
-//!
-//! - [`Interrupt`] turns SIGINT / SIGTERM into a cancel flag the render loop
-//!   polls before each pixel (`RenderControl::cancel`); a second signal ends
-//!   the process at once (exit 128 + signal number), for when the clean stop
-//!   itself hangs (a full disk, a photon pass that is not interruptible).
-//! - [`fingerprint`] identifies everything that changes the samples, so a
-//!   checkpoint is only ever resumed by the same render.
+//! The fingerprint of a render: everything that changes its samples, so
+//! that a checkpoint is only ever resumed by the same render.
 //!
 //! What a resume relies on: the film is a pure function of (scene, settings,
 //! accelerator, seed) per pixel and sample index (see `integrator::render`),
@@ -14,69 +8,9 @@
 //! hundreds of MiB; re-tracing it costs seconds).
 
 use crate::accel::AccelKind;
+use crate::film::CheckpointMeta;
 use crate::scene::{RenderSettings, Scene};
 use sha2::{Digest, Sha256};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Arc;
-
-/// The signals that stop a render cleanly.
-#[cfg(unix)]
-const STOP_SIGNALS: [i32; 2] = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM];
-#[cfg(not(unix))]
-const STOP_SIGNALS: [i32; 1] = [signal_hook::consts::SIGINT];
-
-/// A process-wide stop request from SIGINT (Ctrl-C) or SIGTERM.
-#[derive(Clone, Debug)]
-pub struct Interrupt {
-    stop: Arc<AtomicBool>,
-    signal: Arc<AtomicUsize>,
-}
-
-impl Interrupt {
-    /// Installs the handlers. The first signal sets the flag (and records
-    /// which signal it was); a second one, with the flag already set, exits
-    /// the process immediately with status 128 + signal number.
-    pub fn install() -> std::io::Result<Self> {
-        let stop = Arc::new(AtomicBool::new(false));
-        let signal = Arc::new(AtomicUsize::new(0));
-        for sig in STOP_SIGNALS {
-            // Order matters (signal-hook's documented double Ctrl-C pattern):
-            // the conditional exit must run before the flag is set, so the
-            // first signal only arms it.
-            signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(&stop))?;
-            signal_hook::flag::register_usize(sig, Arc::clone(&signal), sig as usize)?;
-            signal_hook::flag::register(sig, Arc::clone(&stop))?;
-        }
-        Ok(Self { stop, signal })
-    }
-
-    /// The cancel flag to hand to `RenderControl::cancel`.
-    pub fn flag(&self) -> &AtomicBool {
-        &self.stop
-    }
-
-    /// Whether a stop was requested.
-    pub fn requested(&self) -> bool {
-        self.stop.load(Ordering::SeqCst)
-    }
-
-    /// Name of the signal received, if any.
-    pub fn signal_name(&self) -> Option<&'static str> {
-        match self.signal.load(Ordering::SeqCst) {
-            0 => None,
-            s => Some(signal_hook::low_level::signal_name(s as i32).unwrap_or("a signal")),
-        }
-    }
-
-    /// Conventional exit status after a stop: 128 + signal number (130 for
-    /// SIGINT).
-    pub fn exit_code(&self) -> u8 {
-        match self.signal.load(Ordering::SeqCst) {
-            0 => 130,
-            s => (128 + s).min(255) as u8,
-        }
-    }
-}
 
 /// Hex SHA-256 of everything that decides the samples: the scene (camera,
 /// materials, lights, objects, mesh geometry), the render settings except
@@ -98,8 +32,7 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
     // Debug output of f32 is the shortest text that round-trips, so it
     // identifies values exactly.
     let settings = RenderSettings {
-        tone_map: crate::scene::ToneMap::Aces,
-        exposure: 0.0,
+        output: crate::film::OutputSettings::default(),
         ..scene.settings.clone()
     };
     field("settings", format!("{settings:?}").as_bytes());
@@ -119,6 +52,28 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// What differs between a checkpoint's recorded settings and this run's, in
+/// words (the fingerprint alone cannot say).
+pub fn differences(then: &CheckpointMeta, now: &CheckpointMeta) -> String {
+    let mut diffs = Vec::new();
+    let mut field = |name: &str, a: String, b: String| {
+        if a != b {
+            diffs.push(format!("{name} {a} in the checkpoint, {b} now"));
+        }
+    };
+    field("width", then.width.to_string(), now.width.to_string());
+    field("height", then.height.to_string(), now.height.to_string());
+    field("spp", then.spp.to_string(), now.spp.to_string());
+    field("seed", then.seed.to_string(), now.seed.to_string());
+    field("photons", then.photons.to_string(), now.photons.to_string());
+    field("accelerator", then.accel.clone(), now.accel.clone());
+    if diffs.is_empty() {
+        "the scene file, a mesh or another setting changed".to_string()
+    } else {
+        diffs.join(", ")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,8 +90,8 @@ mod tests {
         assert_eq!(base, fingerprint(&scene(), AccelKind::KdTree, ""));
         // Display-only settings do not matter.
         let mut s = scene();
-        s.settings.exposure = 2.0;
-        s.settings.tone_map = crate::scene::ToneMap::Clamp;
+        s.settings.output.exposure = 2.0;
+        s.settings.output.tone_map = crate::film::ToneMap::Clamp;
         assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
         // Everything else does.
         let mut s = scene();

@@ -1,0 +1,324 @@
+//! The command-line arguments (clap derive): one struct per subcommand and
+//! the groups they share.
+
+use caustic::accel::{AccelKind, AccelOptions, TriangleTest};
+use caustic::scene::Scene;
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum AccelArg {
+    Embree,
+    Kdtree,
+    Brute,
+}
+
+impl From<AccelArg> for AccelKind {
+    fn from(a: AccelArg) -> Self {
+        match a {
+            AccelArg::Embree => AccelKind::Embree,
+            AccelArg::Kdtree => AccelKind::KdTree,
+            AccelArg::Brute => AccelKind::Brute,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum TriangleTestArg {
+    Watertight,
+    MollerTrumbore,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum QualityArg {
+    Low,
+    Medium,
+    High,
+}
+
+/// Accelerator selection, shared by the subcommands.
+#[derive(Args)]
+pub struct AccelArgs {
+    /// Accelerator (default: embree when compiled in, else kdtree).
+    #[arg(long, value_enum)]
+    pub accel: Option<AccelArg>,
+    #[command(flatten)]
+    pub backend: BackendArgs,
+}
+
+/// How the accelerators are built, shared by the subcommands (those that
+/// compare several accelerators take a list instead of `--accel`).
+#[derive(Args)]
+pub struct BackendArgs {
+    /// Ray–triangle test of the in-house backends (default: the scene's when one
+    /// scene is rendered, else watertight).
+    #[arg(long, value_enum)]
+    pub triangle_test: Option<TriangleTestArg>,
+    /// Embree BVH build quality.
+    #[arg(long, value_enum, default_value = "high")]
+    pub embree_quality: QualityArg,
+    /// Embree robust traversal mode.
+    #[arg(long)]
+    pub embree_robust: bool,
+}
+
+impl QualityArg {
+    pub fn name(self) -> &'static str {
+        match self {
+            QualityArg::Low => "low",
+            QualityArg::Medium => "medium",
+            QualityArg::High => "high",
+        }
+    }
+}
+
+impl AccelArgs {
+    pub fn kind(&self) -> AccelKind {
+        self.accel.map(AccelKind::from).unwrap_or_else(AccelKind::default_kind)
+    }
+
+    pub fn options(&self, scene: &Scene) -> AccelOptions {
+        self.backend.options(scene)
+    }
+
+    pub fn apply(&self, scene: &mut Scene) {
+        self.backend.apply(scene)
+    }
+}
+
+impl BackendArgs {
+    pub fn options(&self, scene: &Scene) -> AccelOptions {
+        AccelOptions {
+            triangle_test: scene.settings.triangle_test,
+            embree_quality: self.embree_quality.name().into(),
+            embree_robust: self.embree_robust,
+        }
+    }
+
+    pub fn triangle_test(&self) -> Option<TriangleTest> {
+        self.triangle_test.map(|t| match t {
+            TriangleTestArg::Watertight => TriangleTest::Watertight,
+            TriangleTestArg::MollerTrumbore => TriangleTest::MollerTrumbore,
+        })
+    }
+
+    pub fn apply(&self, scene: &mut Scene) {
+        if let Some(t) = self.triangle_test() {
+            scene.settings.triangle_test = t;
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// PNG output (tone mapped). Default: <scene name>.png unless --exr alone is given.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// EXR output (linear HDR).
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// Override the image width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Override the image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Override the samples per pixel.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Override the seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Override the number of photons emitted for caustics (0 turns the pass off).
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Overlay a debug view on the image: the photon map as points (the original
+    /// report's 'p' key) or the KD-tree's boxes (its 'k' key).
+    #[arg(long, value_enum)]
+    pub debug: Option<DebugView>,
+    /// Deepest KD-tree level drawn by `--debug kdtree`.
+    #[arg(long, default_value_t = 10)]
+    pub debug_depth: u32,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Save the accumulation (EXR: per-pixel sums and sample counts, seed and a
+    /// fingerprint of the scene and settings) to this file, atomically, every
+    /// --checkpoint-every seconds and when the render stops.
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between two checkpoints.
+    #[arg(long, default_value_t = 60.0)]
+    pub checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint; the result equals an
+    /// uninterrupted render bit for bit. Width, height, spp, seed, photons and
+    /// accelerator default to the checkpoint's; checkpoints go on to the same
+    /// file unless --checkpoint names another.
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DebugView {
+    Photons,
+    Kdtree,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+#[derive(Args)]
+pub struct CrosscheckArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Number of rays (a quarter each: camera, through the bounds, at mesh vertices and edges, shadow).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: u64,
+    /// Seed of the ray streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// First accelerator.
+    #[arg(long, value_enum, default_value = DEFAULT_A)]
+    pub a: AccelArg,
+    /// Second accelerator.
+    #[arg(long, value_enum, default_value = "kdtree")]
+    pub b: AccelArg,
+    /// Replay one printed ray ("ox,oy,oz,dx,dy,dz[,t_max]") instead of casting seeded rays.
+    #[arg(long)]
+    pub replay: Option<String>,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum GatherArg {
+    Direct,
+    Precomputed,
+}
+
+#[derive(Args)]
+pub struct ConvergeArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Reference image: a linear EXR of the same resolution (e.g. from
+    /// `caustic render SCENE --spp 256 --photons 10000000 --seed 7 --exr ref.exr`).
+    #[arg(long)]
+    pub reference: PathBuf,
+    /// Budgets, comma-separated: SPP:PHOTONS (1:10000), SPP (photons from
+    /// --photons-per-spp, else the scene's), or SECONDSs (2s: doubling search).
+    #[arg(long, default_value = "1,2,4,8,16")]
+    pub budgets: String,
+    /// Accelerators, one curve each (default: embree,kdtree, or kdtree without Embree).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub accel: Vec<AccelArg>,
+    /// Photon gather modes to compare (one curve per accelerator and mode;
+    /// default: the scene's mode only).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub gather: Vec<GatherArg>,
+    /// Photons per spp for budgets that give no photon count.
+    #[arg(long)]
+    pub photons_per_spp: Option<u64>,
+    /// Override the scene's photon count (the default for SPP and time budgets).
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// relMSE epsilon: (x - ref)^2 / (ref^2 + epsilon).
+    #[arg(long, default_value_t = caustic::analysis::converge::RELMSE_EPSILON)]
+    pub epsilon: f64,
+    /// CSV output.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// PNG plot output (log-log error against time).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Plot size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1400x560")]
+    pub plot_size: String,
+    /// Override the image width (must match the reference).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Override the image height (must match the reference).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Override the seed (use a different one from the reference's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub backend: BackendArgs,
+    /// No progress lines.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scene files (TOML). Default: scenes/dragon.toml.
+    pub scenes: Vec<PathBuf>,
+    /// Also write the report as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Accelerators, comma-separated (default: every compiled-in one but brute).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub accel: Vec<AccelArg>,
+    /// Camera rays and incoherent rays per scene (shadow rays: one per light per camera hit).
+    #[arg(long, default_value_t = caustic::analysis::bench::DEFAULT_RAYS)]
+    pub rays: usize,
+    /// Seed of the ray sets and of the render.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Timed runs per ray set (the best is reported).
+    #[arg(long, default_value_t = caustic::analysis::bench::DEFAULT_REPEATS)]
+    pub repeats: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Width of the full render (and aspect of the camera rays).
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Height of the full render.
+    #[arg(long, default_value_t = 360)]
+    pub height: u32,
+    /// Samples per pixel of the full render.
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
+    /// Photons of the full render (default: the scene's, at most 100,000).
+    #[arg(long)]
+    pub photons: Option<u64>,
+    #[command(flatten)]
+    pub backend: BackendArgs,
+    /// No progress lines on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct StressArgs {
+    /// Also write the table as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Seed of the ray streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Rays (or trials) per case and configuration.
+    #[arg(long, default_value_t = 200_000)]
+    pub rays: u64,
+}
+
+#[cfg(feature = "embree")]
+pub const DEFAULT_A: &str = "embree";
+#[cfg(not(feature = "embree"))]
+pub const DEFAULT_A: &str = "brute";

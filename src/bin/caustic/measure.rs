@@ -1,0 +1,273 @@
+//! The inspection and measurement commands: `info`, `crosscheck`,
+//! `converge`, `bench` and `stress`.
+
+use crate::args::{BenchArgs, ConvergeArgs, CrosscheckArgs, GatherArg, InfoArgs, StressArgs};
+use crate::{bad_input, job_failure, load, Failure};
+use anyhow::Context;
+use caustic::accel::{self, AccelKind, AccelOptions};
+use caustic::film;
+use caustic::integrator::RenderPlan;
+use caustic::job::Overrides;
+use caustic::scene;
+use std::time::Instant;
+
+pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
+    let mut scene = load(&args.scene)?;
+    args.accel.apply(&mut scene);
+    let st = &scene.settings;
+    let distinct: u64 = scene.meshes.iter().map(|m| m.triangles.len() as u64).sum();
+    let b = scene.bounds();
+    println!("scene       {}", args.scene.display());
+    println!(
+        "image       {}×{}, {} spp, max depth {}, seed {}",
+        st.width, st.height, st.spp, st.max_depth, st.seed
+    );
+    println!(
+        "objects     {} ({} mesh instances)",
+        scene.objects.len(),
+        scene
+            .objects
+            .iter()
+            .filter(|o| matches!(o.shape, scene::Shape::Mesh { .. }))
+            .count()
+    );
+    println!(
+        "meshes      {} distinct, {} triangles ({} instanced)",
+        scene.meshes.len(),
+        distinct,
+        scene.instanced_triangles()
+    );
+    println!("materials   {}", scene.materials.len());
+    println!("lights      {}", scene.lights.len());
+    println!(
+        "bounds      [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+    );
+    let accel = accel::build(&scene, args.accel.kind(), &args.accel.options(&scene))?;
+    let s = accel.stats();
+    println!(
+        "accelerator {}: built in {:.3} s, {:.1} MiB, {} BLAS, {} instances",
+        s.name,
+        s.build_time.as_secs_f64(),
+        s.memory_bytes as f64 / (1024.0 * 1024.0),
+        s.blas_count,
+        s.instances
+    );
+    for (k, v) in &s.details {
+        println!("            {k}: {v}");
+    }
+    if let Some(peak) = caustic::memory::peak_rss_bytes() {
+        println!(
+            "peak memory {:.1} MiB resident (scene + accelerator)",
+            peak as f64 / (1u64 << 20) as f64
+        );
+    }
+    println!("{}", RenderPlan::new(&scene));
+    Ok(())
+}
+
+pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
+    use caustic::analysis::crosscheck::{compare_one, crosscheck, parse_ray, CrosscheckOptions};
+    let mut scene = load(&args.scene)?;
+    args.accel.apply(&mut scene);
+    let options = args.accel.options(&scene);
+    let a = accel::build(&scene, args.a.into(), &options)?;
+    let b = accel::build(&scene, args.b.into(), &options)?;
+    let (sa, sb) = (a.stats(), b.stats());
+    println!(
+        "crosscheck {}: {} (built in {:.3} s) vs {} (built in {:.3} s)",
+        args.scene.display(),
+        sa.name,
+        sa.build_time.as_secs_f64(),
+        sb.name,
+        sb.build_time.as_secs_f64()
+    );
+    if let Some(text) = &args.replay {
+        let (ray, t_max) = parse_ray(text).map_err(bad_input)?;
+        let c = compare_one(&scene, a.as_ref(), b.as_ref(), &ray, t_max);
+        println!("{}", c.describe(&scene));
+        return if c.is_ok() {
+            Ok(())
+        } else {
+            Err(anyhow::anyhow!("the accelerators disagree on this ray").into())
+        };
+    }
+    let start = Instant::now();
+    let report = crosscheck(
+        &scene,
+        a.as_ref(),
+        b.as_ref(),
+        &CrosscheckOptions {
+            rays: args.rays,
+            seed: args.seed,
+        },
+    );
+    println!("{report}");
+    println!("{} rays in {:.2} s", args.rays, start.elapsed().as_secs_f64());
+    if report.is_ok() {
+        Ok(())
+    } else {
+        Err(anyhow::anyhow!("{} disagreement(s) that are not ties", report.disagreement_count()).into())
+    }
+}
+
+pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
+    use caustic::analysis::converge::{self, ConvergeOptions, CurveSpec};
+    let mut scene = load(&args.scene)?;
+    Overrides {
+        width: args.width,
+        height: args.height,
+        seed: args.seed,
+        photons: args.photons,
+        triangle_test: args.backend.triangle_test(),
+        ..Overrides::default()
+    }
+    .apply(&mut scene, &args.scene)
+    .map_err(job_failure)?;
+    let accels: Vec<AccelKind> = if args.accel.is_empty() {
+        caustic::analysis::bench::default_accels()
+    } else {
+        args.accel.iter().map(|&a| a.into()).collect()
+    };
+    let gathers: Vec<scene::GatherMode> = args
+        .gather
+        .iter()
+        .map(|g| match g {
+            GatherArg::Direct => scene::GatherMode::Direct,
+            GatherArg::Precomputed => scene::GatherMode::Precomputed,
+        })
+        .collect();
+    let options = ConvergeOptions {
+        budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
+        curves: CurveSpec::cross(&accels, &gathers),
+        photons_per_spp: args.photons_per_spp,
+        epsilon: args.epsilon,
+        accel: args.backend.options(&scene),
+    };
+    let plot_size = args
+        .plot_size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .ok_or_else(|| {
+            bad_input(anyhow::anyhow!(
+                "--plot-size {:?}: expected WIDTHxHEIGHT",
+                args.plot_size
+            ))
+        })?;
+    caustic::analysis::plot::check_size(plot_size.0, plot_size.1)
+        .map_err(|e| bad_input(anyhow::anyhow!("--plot-size: {e}")))?;
+    for out in args.csv.iter().chain(args.plot.iter()) {
+        film::check_writable(out).map_err(bad_input)?;
+    }
+    let reference =
+        converge::read_exr(&args.reference, Some((scene.settings.width, scene.settings.height))).map_err(bad_input)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let quiet = args.quiet;
+    let results = pool
+        .install(|| {
+            converge::run(&scene, &reference, &options, &mut |line| {
+                if !quiet {
+                    eprintln!("{line}");
+                }
+            })
+        })
+        .map_err(|e| match e {
+            converge::ConvergeError::Accel { .. } => Failure::from(e),
+            other => bad_input(other),
+        })?;
+    print!("{}", converge::table_text(&results, options.epsilon));
+    if let Some(p) = &args.csv {
+        converge::write_csv(p, &results).map_err(bad_input)?;
+        println!("written: {}", p.display());
+    }
+    if let Some(p) = &args.plot {
+        let title = args.scene.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+        converge::write_plot(p, &results, &title, options.epsilon, plot_size.0, plot_size.1).map_err(bad_input)?;
+        println!("written: {}", p.display());
+    }
+    Ok(())
+}
+
+pub fn run_bench(args: BenchArgs) -> Result<(), Failure> {
+    use caustic::analysis::bench::{self, BenchOptions, RenderOverrides};
+    let scenes = if args.scenes.is_empty() {
+        vec![bench::default_scene()]
+    } else {
+        args.scenes
+    };
+    if let Some(path) = &args.json {
+        film::check_writable(path).map_err(bad_input)?;
+    }
+    let options = BenchOptions {
+        accels: if args.accel.is_empty() {
+            bench::default_accels()
+        } else {
+            args.accel.iter().map(|&a| a.into()).collect()
+        },
+        rays: args.rays,
+        seed: args.seed,
+        repeats: args.repeats,
+        render: RenderOverrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            photons: args.photons,
+        },
+        accel_options: AccelOptions {
+            triangle_test: args
+                .backend
+                .triangle_test()
+                .unwrap_or(AccelOptions::default().triangle_test),
+            embree_quality: args.backend.embree_quality.name().into(),
+            embree_robust: args.backend.embree_robust,
+        },
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let quiet = args.quiet;
+    let report = pool
+        .install(|| {
+            bench::run(&scenes, &options, &|line| {
+                if !quiet {
+                    eprintln!("bench: {line}");
+                }
+            })
+        })
+        .map_err(|e| if e.is_bad_input() { bad_input(e) } else { e.into() })?;
+    print!("{report}");
+    if let Some(path) = &args.json {
+        report.write_json(path).map_err(bad_input)?;
+        println!("written: {}", path.display());
+    }
+    Ok(())
+}
+
+pub fn run_stress(args: StressArgs) -> Result<(), Failure> {
+    use caustic::analysis::stress::{run_stress, StressOptions};
+    if let Some(path) = &args.json {
+        film::check_writable(path).map_err(bad_input)?;
+    }
+    let start = Instant::now();
+    let report = run_stress(&StressOptions {
+        seed: args.seed,
+        rays: args.rays.max(1),
+        progress: true,
+        ..StressOptions::default()
+    });
+    println!("{report}");
+    println!("stress run in {:.1} s", start.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        report
+            .write_json(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    match report.default_failures() {
+        0 => Ok(()),
+        n => Err(anyhow::anyhow!("{n} failure(s) in default configurations").into()),
+    }
+}

@@ -1,0 +1,163 @@
+//! `caustic render`: a [`RenderJob`] with a progress bar, Ctrl-C and a summary.
+
+use crate::args::{DebugView, RenderArgs};
+use crate::{bad_input, job_failure, Failure};
+use anyhow::Context;
+use caustic::accel::AccelKind;
+use caustic::job::{self, JobError, Overrides, RenderJob, RenderRequest};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::time::Duration;
+
+pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
+        return Err(bad_input(anyhow::anyhow!(
+            "--checkpoint-every {}: must be a positive number of seconds",
+            args.checkpoint_every
+        )));
+    }
+    let png = match (&args.output, &args.exr) {
+        (Some(p), _) => Some(p.clone()),
+        (None, Some(_)) => None,
+        (None, None) => Some(PathBuf::from(format!(
+            "{}.png",
+            args.scene
+                .file_stem()
+                .map(|s| s.to_string_lossy())
+                .unwrap_or_else(|| "render".into())
+        ))),
+    };
+    let request = RenderRequest {
+        scene: args.scene.clone(),
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            seed: args.seed,
+            photons: args.photons,
+            triangle_test: args.accel.backend.triangle_test(),
+        },
+        accel: args.accel.accel.map(AccelKind::from),
+        embree_quality: args.accel.backend.embree_quality.name().into(),
+        embree_robust: args.accel.backend.embree_robust,
+        png,
+        exr: args.exr.clone(),
+        checkpoint: args.checkpoint.clone(),
+        checkpoint_every: Duration::from_secs_f64(args.checkpoint_every),
+        resume: args.resume.clone(),
+        debug: args.debug.map(|d| match d {
+            DebugView::Photons => job::DebugView::Photons,
+            DebugView::Kdtree => job::DebugView::KdTree {
+                depth: args.debug_depth,
+            },
+        }),
+    };
+    let job = RenderJob::prepare(&request).map_err(job_failure)?;
+    let interrupt = job::Interrupt::install().context("cannot install the Ctrl-C handler")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    pool.install(|| render_job(job, &args, &interrupt))
+}
+
+fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> Result<(), Failure> {
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
+            .expect("static template"),
+    );
+    let (scene_path, resumed_from) = (job.source.clone(), job.resumed_from.clone());
+    let checkpoint = job.checkpoint.as_ref().map(|(p, _)| p.clone());
+    let started = |start: &job::JobStart| {
+        let st = start.plan;
+        if !args.quiet {
+            eprintln!(
+                "caustic: {} — {}×{}, {} spp, accelerator {} built in {:.3} s",
+                scene_path.display(),
+                st.width,
+                st.height,
+                st.spp,
+                start.accel.name,
+                start.accel.build_time.as_secs_f64()
+            );
+            eprintln!("{}", start.plan);
+        }
+        if let Some(path) = &resumed_from {
+            eprintln!(
+                "resuming {}: {} of {} samples done",
+                path.display(),
+                start.resumed_samples,
+                start.total_samples
+            );
+        }
+        bar.set_length(start.total_samples);
+        bar.set_position(start.resumed_samples);
+        bar.reset_eta();
+    };
+    let progress = |done, _total| bar.set_position(done);
+    let warn = |message: &str| bar.suspend(|| eprintln!("warning: {message}"));
+    let hooks = job::JobHooks {
+        cancel: Some(interrupt.flag()),
+        started: &started,
+        progress: &progress,
+        warn: &warn,
+    };
+    let signal = || interrupt.signal_name().unwrap_or("a signal");
+    let report = match job.run(&hooks) {
+        Ok(r) => r,
+        Err(JobError::StoppedBeforeFirstSample) => {
+            return Err(Failure {
+                code: interrupt.exit_code(),
+                error: anyhow::anyhow!("interrupted by {} before the first sample: nothing written", signal()),
+            })
+        }
+        Err(e) => return Err(job_failure(e)),
+    };
+    bar.finish_and_clear();
+    let build = report.accel.build_time;
+    println!("{}", report.output.stats.to_string().trim_end());
+    println!(
+        "total time: {:.3} s (accelerator build {:.3} s, render {:.3} s)",
+        (report.render_time + build).as_secs_f64(),
+        build.as_secs_f64(),
+        report.render_time.as_secs_f64()
+    );
+    let skipped: Vec<String> = report.plan.skipped().iter().map(ToString::to_string).collect();
+    println!(
+        "skipped: {}",
+        if skipped.is_empty() {
+            "nothing".to_string()
+        } else {
+            skipped.join("; ")
+        }
+    );
+    println!("written: {}", report.written.join(", "));
+    if !report.complete() {
+        let (lo, hi) = report.output.accumulation.taken_range();
+        let how_to_resume = match &checkpoint {
+            Some(path) => format!(
+                "; continue with: caustic render {} --resume {}",
+                scene_path.display(),
+                path.display()
+            ),
+            None => " (no --checkpoint: it cannot be resumed)".to_string(),
+        };
+        return Err(Failure {
+            code: interrupt.exit_code(),
+            error: anyhow::anyhow!(
+                "interrupted by {}: {} of {} samples done ({lo}–{hi} of {} spp per pixel), \
+                 partial image written{how_to_resume}",
+                signal(),
+                report.samples_done(),
+                report.total_samples,
+                report.spp()
+            ),
+        });
+    }
+    Ok(())
+}

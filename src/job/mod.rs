@@ -1,0 +1,441 @@
+//! A render job: one scene rendered with one accelerator, from a fresh or
+//! resumed accumulation, to PNG / EXR / checkpoint files. The command line,
+//! the benchmarks and the analysis commands all render through it, so
+//! resume, fingerprints, checkpoints and outputs behave the same everywhere.
+//!
+//! A job is made in two steps so that bad input is refused before any work:
+//! [`RenderJob::prepare`] loads the scene, applies the overrides (checked like
+//! the scene file's values), reads and checks a checkpoint to resume, and
+//! checks that every output can be written; [`RenderJob::run`] builds the
+//! accelerator, renders (photon pass, progressive passes, periodic
+//! checkpoints, cancel) and writes the outputs atomically.
+
+pub mod fingerprint;
+pub mod interrupt;
+
+pub use fingerprint::fingerprint;
+pub use interrupt::Interrupt;
+
+use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, AccelStats};
+use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, OutputError};
+use crate::geometry::TriangleTest;
+use crate::integrator::{self, debug, RenderOutput, RenderPlan};
+use crate::scene::{self, Scene, SceneError};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// Values given on the command line (or by a caller) that replace the scene
+/// file's. Each is validated like the file's own value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// Image width.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Seed of every random stream.
+    pub seed: Option<u64>,
+    /// Photons emitted by the caustic pass (0 turns it off).
+    pub photons: Option<u64>,
+    /// Ray–triangle test of the in-house accelerators.
+    pub triangle_test: Option<TriangleTest>,
+}
+
+impl Overrides {
+    /// Applies the overrides to `scene` (loaded from `source`), refusing
+    /// values beyond the limits with the file named in the message.
+    pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+        let s = &mut scene.settings;
+        s.width = self.width.unwrap_or(s.width);
+        s.height = self.height.unwrap_or(s.height);
+        s.spp = self.spp.unwrap_or(s.spp);
+        s.seed = self.seed.unwrap_or(s.seed);
+        if let Some(n) = self.photons {
+            crate::limits::check_photon_count(n)
+                .map_err(|e| JobError::Invalid(format!("{}: --photons: {e}", source.display())))?;
+            s.photons.count = n;
+        }
+        if let Some(t) = self.triangle_test {
+            s.triangle_test = t;
+        }
+        crate::limits::check_image_limits(s.width, s.height, s.spp)
+            .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))
+    }
+}
+
+/// A debug view drawn over the finished image (the original report's `p`
+/// and `k` keys, offline).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DebugView {
+    /// The photon map's photons as points.
+    Photons,
+    /// The KD-tree's cells, down to this depth.
+    KdTree {
+        /// Deepest level drawn.
+        depth: u32,
+    },
+}
+
+/// What to render and where the results go.
+#[derive(Clone, Debug)]
+pub struct RenderRequest {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// Values replacing the scene file's.
+    pub overrides: Overrides,
+    /// Accelerator (`None`: the checkpoint's when resuming, else the default).
+    pub accel: Option<AccelKind>,
+    /// Embree build quality: "low", "medium" or "high".
+    pub embree_quality: String,
+    /// Embree robust traversal.
+    pub embree_robust: bool,
+    /// Tone-mapped PNG output.
+    pub png: Option<PathBuf>,
+    /// Linear EXR output.
+    pub exr: Option<PathBuf>,
+    /// Checkpoint file, saved periodically and when the render stops
+    /// (default when resuming: the resumed file).
+    pub checkpoint: Option<PathBuf>,
+    /// Least time between two checkpoints.
+    pub checkpoint_every: Duration,
+    /// Checkpoint to continue.
+    pub resume: Option<PathBuf>,
+    /// Debug overlay.
+    pub debug: Option<DebugView>,
+}
+
+impl RenderRequest {
+    /// A request for `scene` with every setting from the scene file, no output.
+    pub fn new(scene: impl Into<PathBuf>) -> Self {
+        let defaults = AccelOptions::default();
+        Self {
+            scene: scene.into(),
+            overrides: Overrides::default(),
+            accel: None,
+            embree_quality: defaults.embree_quality,
+            embree_robust: defaults.embree_robust,
+            png: None,
+            exr: None,
+            checkpoint: None,
+            checkpoint_every: Duration::from_secs(60),
+            resume: None,
+            debug: None,
+        }
+    }
+}
+
+/// Why a job could not be prepared or run.
+#[derive(Debug, Error)]
+pub enum JobError {
+    /// The scene file is missing or invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The checkpoint to resume is unreadable or invalid.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// An output cannot be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// A setting or override is out of range, or the checkpoint is of
+    /// another render.
+    #[error("{0}")]
+    Invalid(String),
+    /// The accelerator could not be built.
+    #[error(transparent)]
+    Accel(#[from] AccelError),
+    /// Stopped by a signal before the first sample: nothing was written.
+    #[error("interrupted before the first sample: nothing written")]
+    StoppedBeforeFirstSample,
+}
+
+impl JobError {
+    /// True for errors in the user's input (exit code 2), false for
+    /// failures of the renderer or the machine.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, JobError::Accel(_) | JobError::StoppedBeforeFirstSample)
+    }
+}
+
+/// A job ready to run: the scene with its final settings, the accelerator,
+/// the accumulation to continue and the outputs, all checked.
+pub struct RenderJob {
+    /// The scene, with the overrides applied.
+    pub scene: Scene,
+    /// Where the scene came from (for messages).
+    pub source: PathBuf,
+    /// Accelerator.
+    pub accel: AccelKind,
+    /// How it is built.
+    pub accel_options: AccelOptions,
+    /// Tone-mapped PNG output.
+    pub png: Option<PathBuf>,
+    /// Linear EXR output.
+    pub exr: Option<PathBuf>,
+    /// Checkpoint file and what it records.
+    pub checkpoint: Option<(PathBuf, CheckpointMeta)>,
+    /// Least time between two checkpoints.
+    pub checkpoint_every: Duration,
+    /// The accumulation the render continues (empty for a fresh render).
+    pub start: Accumulation,
+    /// The checkpoint this job resumes, if any.
+    pub resumed_from: Option<PathBuf>,
+    /// Debug overlay.
+    pub debug: Option<DebugView>,
+}
+
+/// Reported once the accelerator is built, before the first sample.
+pub struct JobStart<'a> {
+    /// The accelerator's statistics.
+    pub accel: &'a AccelStats,
+    /// What the render will do.
+    pub plan: &'a RenderPlan,
+    /// Samples already in the resumed accumulation.
+    pub resumed_samples: u64,
+    /// Samples of the whole render.
+    pub total_samples: u64,
+}
+
+/// How a caller follows and stops a running job.
+pub struct JobHooks<'a> {
+    /// Set to stop before the next pixel (Ctrl-C, a viewer's change).
+    pub cancel: Option<&'a AtomicBool>,
+    /// Called once before rendering.
+    pub started: &'a dyn Fn(&JobStart),
+    /// `progress(samples_done, samples_total)`, from worker threads.
+    pub progress: &'a (dyn Fn(u64, u64) + Sync),
+    /// Non-fatal problems (a checkpoint that could not be saved, a debug
+    /// view with nothing to draw), from any thread.
+    pub warn: &'a (dyn Fn(&str) + Sync),
+}
+
+impl JobHooks<'_> {
+    /// Hooks that report nothing and never cancel.
+    pub fn silent() -> JobHooks<'static> {
+        JobHooks {
+            cancel: None,
+            started: &|_| {},
+            progress: &|_, _| {},
+            warn: &|_| {},
+        }
+    }
+}
+
+/// What a finished (or stopped) job did.
+pub struct JobReport {
+    /// The accelerator's statistics (its build time included).
+    pub accel: AccelStats,
+    /// The plan the render followed.
+    pub plan: RenderPlan,
+    /// The image, its accumulation and the render statistics.
+    pub output: RenderOutput,
+    /// Wall time from the first sample (photon pass included) to the
+    /// outputs written.
+    pub render_time: Duration,
+    /// The files written, as shown to the user.
+    pub written: Vec<String>,
+    /// Samples of the whole render.
+    pub total_samples: u64,
+}
+
+impl JobReport {
+    /// Samples every pixel was meant to receive.
+    pub fn spp(&self) -> u32 {
+        self.plan.spp
+    }
+
+    /// Every pixel has all its samples.
+    pub fn complete(&self) -> bool {
+        self.output.complete
+    }
+
+    /// Samples taken so far, resumed ones included.
+    pub fn samples_done(&self) -> u64 {
+        self.output.accumulation.samples_taken()
+    }
+}
+
+impl RenderJob {
+    /// Loads and checks everything a render needs; nothing is rendered and no
+    /// file is written.
+    pub fn prepare(request: &RenderRequest) -> Result<Self, JobError> {
+        let mut scene = scene::load_scene(&request.scene)?;
+        let resumed = match &request.resume {
+            Some(path) => Some(film::read_checkpoint(path)?),
+            None => None,
+        };
+        let mut overrides = request.overrides.clone();
+        let mut accel = request.accel;
+        if let Some(c) = &resumed {
+            // The checkpoint's settings are the defaults; explicit overrides
+            // that differ are refused by the fingerprint check below.
+            let m = &c.meta;
+            overrides.width.get_or_insert(m.width);
+            overrides.height.get_or_insert(m.height);
+            overrides.spp.get_or_insert(m.spp);
+            overrides.seed.get_or_insert(m.seed);
+            overrides.photons.get_or_insert(m.photons);
+            if accel.is_none() {
+                accel = AccelKind::from_name(&m.accel);
+            }
+        }
+        overrides.apply(&mut scene, &request.scene)?;
+        let accel = accel.unwrap_or_else(AccelKind::default_kind);
+        let accel_options = AccelOptions {
+            triangle_test: scene.settings.triangle_test,
+            embree_quality: request.embree_quality.clone(),
+            embree_robust: request.embree_robust,
+        };
+        let checkpoint_path = request.checkpoint.clone().or_else(|| request.resume.clone());
+        let meta = checkpoint_meta(&scene, accel, &accel_options);
+        if let (Some(c), Some(path)) = (&resumed, &request.resume) {
+            if c.meta.fingerprint != meta.fingerprint {
+                return Err(JobError::Invalid(format!(
+                    "{}: the checkpoint is of a different render ({}); resume with the scene and settings it was started with",
+                    path.display(),
+                    fingerprint::differences(&c.meta, &meta)
+                )));
+            }
+        }
+        // Fail before hours of rendering, not after.
+        for out in request.png.iter().chain(&request.exr).chain(&checkpoint_path) {
+            film::check_writable(out)?;
+        }
+        let start = match resumed {
+            Some(c) => c.accumulation,
+            None => Accumulation::new(scene.settings.width, scene.settings.height),
+        };
+        Ok(Self {
+            source: request.scene.clone(),
+            accel,
+            accel_options,
+            png: request.png.clone(),
+            exr: request.exr.clone(),
+            checkpoint: checkpoint_path.map(|p| (p, meta)),
+            checkpoint_every: request.checkpoint_every,
+            start,
+            resumed_from: request.resume.clone(),
+            debug: request.debug,
+            scene,
+        })
+    }
+
+    /// A job over a scene built in memory: no files, no checkpoint.
+    pub fn in_memory(scene: Scene, accel: AccelKind, accel_options: AccelOptions) -> Self {
+        let start = Accumulation::new(scene.settings.width, scene.settings.height);
+        Self {
+            scene,
+            source: PathBuf::from("<memory>"),
+            accel,
+            accel_options,
+            png: None,
+            exr: None,
+            checkpoint: None,
+            checkpoint_every: Duration::from_secs(60),
+            start,
+            resumed_from: None,
+            debug: None,
+        }
+    }
+
+    /// The render plan of this job.
+    pub fn plan(&self) -> RenderPlan {
+        let mut plan = RenderPlan::new(&self.scene);
+        plan.keep_photon_positions = matches!(self.debug, Some(DebugView::Photons));
+        plan
+    }
+
+    /// Builds the accelerator, renders and writes the outputs. A stopped
+    /// render still writes its partial image and checkpoint (check
+    /// [`JobReport::complete`]).
+    pub fn run(self, hooks: &JobHooks) -> Result<JobReport, JobError> {
+        let accel = accel::build(&self.scene, self.accel, &self.accel_options)?;
+        self.run_with(accel.as_ref(), hooks)
+    }
+
+    /// Like [`run`](Self::run), with an accelerator built by the caller
+    /// (benchmarks time the build apart; the viewer keeps it across renders).
+    pub fn run_with(self, accel: &dyn Accel, hooks: &JobHooks) -> Result<JobReport, JobError> {
+        let stats = accel.stats();
+        let plan = self.plan();
+        let st = &self.scene.settings;
+        let total_samples = st.width as u64 * st.height as u64 * st.spp as u64;
+        (hooks.started)(&JobStart {
+            accel: &stats,
+            plan: &plan,
+            resumed_samples: self.start.samples_taken(),
+            total_samples,
+        });
+        let checkpoint = self.checkpoint.as_ref();
+        let save = |acc: &Accumulation| {
+            if let Some((path, meta)) = checkpoint {
+                if let Err(e) = film::write_checkpoint(path, acc, meta) {
+                    (hooks.warn)(&format!("checkpoint not saved (the render goes on): {e}"));
+                }
+            }
+        };
+        let control = integrator::RenderControl {
+            cancel: hooks.cancel,
+            sample_limit: None,
+            checkpoint: checkpoint.map(|_| integrator::CheckpointHook {
+                every: self.checkpoint_every,
+                save: &save,
+            }),
+            progress: hooks.progress,
+        };
+        let begin = Instant::now();
+        let mut output = integrator::render_with_control(&self.scene, accel, &plan, self.start, &control);
+        if output.accumulation.samples_taken() == 0 {
+            // Stopped before the first sample: keep whatever files are there.
+            return Err(JobError::StoppedBeforeFirstSample);
+        }
+        match self.debug {
+            Some(DebugView::Photons) => match output.photon_map.clone() {
+                Some(map) => debug::overlay_photons(&mut output.film, &self.scene, &map),
+                None => (hooks.warn)("--debug photons: no photon map (the plan skipped the photon pass)"),
+            },
+            Some(DebugView::KdTree { depth }) => {
+                let tree = accel::kdtree::KdTreeAccel::build(&self.scene, &self.accel_options);
+                debug::overlay_boxes(&mut output.film, &self.scene.camera, &tree.node_boxes(depth));
+            }
+            None => {}
+        }
+        let mut written = Vec::new();
+        if let Some(p) = &self.png {
+            film::write_png(p, &output.film, &st.output)?;
+            written.push(p.display().to_string());
+        }
+        if let Some(p) = &self.exr {
+            film::write_exr(p, &output.film)?;
+            written.push(p.display().to_string());
+        }
+        if let Some((path, meta)) = checkpoint {
+            film::write_checkpoint(path, &output.accumulation, meta)?;
+            written.push(format!("{} (checkpoint)", path.display()));
+        }
+        Ok(JobReport {
+            accel: stats,
+            plan,
+            output,
+            render_time: begin.elapsed(),
+            written,
+            total_samples,
+        })
+    }
+}
+
+/// What a checkpoint of this render records (its fingerprint included).
+pub fn checkpoint_meta(scene: &Scene, accel: AccelKind, options: &AccelOptions) -> CheckpointMeta {
+    let st = &scene.settings;
+    CheckpointMeta {
+        width: st.width,
+        height: st.height,
+        spp: st.spp,
+        seed: st.seed,
+        photons: st.photons.count,
+        accel: accel.name().to_string(),
+        fingerprint: fingerprint(scene, accel, &options.fingerprint_text(accel)),
+    }
+}
