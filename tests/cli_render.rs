@@ -292,3 +292,64 @@ fn bad_input_exits_2_with_a_clear_message() {
     assert!(stderr(&o).contains("/nonexistent-dir"), "{}", stderr(&o));
     assert!(stdout(&o).is_empty(), "nothing was rendered: {}", stdout(&o));
 }
+
+/// Parameters the integrator ignores, and materials that reflect more than
+/// they receive, are named by `info` and at the start of a render.
+#[test]
+fn dead_and_energy_gaining_material_parameters_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[render]
+width = 8
+height = 6
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.chrome]
+diffuse = [0.3, 0.3, 0.3]
+specular = [0.5, 0.5, 0.5]
+mirror = { reflectivity = 1.0 }
+[materials.hot]
+diffuse = [0.9, 0.9, 0.9]
+specular = [0.3, 0.3, 0.3]
+[[lights]]
+type = "point"
+position = [0, 3, 3]
+intensity = 10.0
+[[objects]]
+type = "sphere"
+center = [-1, 0, 0]
+radius = 0.5
+material = "chrome"
+[[objects]]
+type = "sphere"
+center = [1, 0, 0]
+radius = 0.5
+material = "hot"
+"#,
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let info = caustic(&["info", s, "--accel", "kdtree"]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    let text = stdout(&info);
+    assert!(
+        text.contains("material `chrome`: `diffuse`, `specular`, `ambient` are ignored: a perfect mirror"),
+        "{text}"
+    );
+    assert!(
+        text.contains("material `hot`: reflects more light than it receives"),
+        "{text}"
+    );
+    let out = dir.path().join("o.png");
+    let render = caustic(&["render", s, "--accel", "kdtree", "-o", out.to_str().unwrap()]);
+    assert!(render.status.success(), "{}", stderr(&render));
+    assert!(
+        stderr(&render).contains("warning: material `hot`"),
+        "{}",
+        stderr(&render)
+    );
+}

@@ -6,16 +6,15 @@
 //! force costs rays × triangles). The rules (what is an agreement, a tie, a
 //! disagreement) are the library's: see `caustic::analysis::crosscheck`.
 //!
-//! A scene is skipped only when a mesh it references cannot be loaded (a
-//! missing asset, or a loader not built yet), and the reason is printed; any
-//! other load error fails the test.
+//! Every scene must load (the dragon is found or fetched by `io::assets`);
+//! a scene that does not load fails the test.
 
 #[path = "embree_support/mod.rs"]
 mod embree_support;
 
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::analysis::crosscheck::{crosscheck, CrosscheckOptions, CrosscheckReport, RayKind};
-use caustic::scene::{load_scene, Scene, SceneError};
+use caustic::scene::{load_scene, Scene};
 use std::path::{Path, PathBuf};
 
 /// Brute force is used only below this many instanced triangles.
@@ -28,10 +27,7 @@ fn scene_files(dirs: &[&str]) -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
     for dir in dirs {
-        let Ok(entries) = std::fs::read_dir(root.join(dir)) else {
-            eprintln!("no directory {dir}");
-            continue;
-        };
+        let entries = std::fs::read_dir(root.join(dir)).unwrap_or_else(|e| panic!("{dir}: {e}"));
         for entry in entries {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "toml") {
@@ -41,12 +37,6 @@ fn scene_files(dirs: &[&str]) -> Vec<PathBuf> {
     }
     files.sort();
     files
-}
-
-/// True when the KD-tree backend is the brute-force scaffold of a branch
-/// where the real tree has not been merged yet (it reports brute's stats).
-fn kdtree_is_scaffold(kd: &dyn Accel) -> bool {
-    kd.stats().name == "brute"
 }
 
 /// The accelerator pairs worth running on `scene`, built.
@@ -66,17 +56,7 @@ fn pairs(scene: &Scene, name: &str) -> Vec<(Box<dyn Accel>, Box<dyn Accel>)> {
     }
     let mut built = Vec::new();
     for (a, b) in kinds {
-        let (a, b) = (build(a), build(b));
-        if !small && (kdtree_is_scaffold(a.as_ref()) || kdtree_is_scaffold(b.as_ref())) {
-            eprintln!(
-                "{name}: skipped {} vs {}: the KD-tree of this build is the brute-force scaffold and the scene has {} triangles",
-                a.stats().name,
-                b.stats().name,
-                scene.instanced_triangles()
-            );
-            continue;
-        }
-        built.push((a, b));
+        built.push((build(a), build(b)));
     }
     if built.is_empty() {
         eprintln!("{name}: no accelerator pair can run on this scene in this build");
@@ -109,14 +89,7 @@ fn every_scene_file_crosschecks() {
     let mut checked = 0;
     for path in &files {
         let name = path.display().to_string();
-        let scene = match load_scene(path) {
-            Ok(scene) => scene,
-            Err(e @ SceneError::Mesh { .. }) => {
-                eprintln!("SKIPPED {name}: a mesh cannot be loaded: {e}");
-                continue;
-            }
-            Err(e) => panic!("{name} does not load: {e}"),
-        };
+        let scene = load_scene(path).unwrap_or_else(|e| panic!("{name} does not load: {e}"));
         for (a, b) in pairs(&scene, &name) {
             let report = crosscheck(
                 &scene,
@@ -160,34 +133,18 @@ fn instanced_mesh_scene_crosschecks() {
     }
 }
 
-/// The requirement: at least 1M rays on the dragon, Embree against
-/// the KD-tree.
+/// A million rays on the dragon, Embree against the KD-tree.
 #[test]
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "needs Embree: brute force cannot check 1M rays against 871k triangles"
+)]
 fn dragon_crosschecks_on_a_million_rays() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon.toml");
-    if !path.exists() {
-        eprintln!("SKIPPED: {} does not exist in this build", path.display());
-        return;
-    }
-    let scene = match load_scene(&path) {
-        Ok(scene) => scene,
-        Err(e @ SceneError::Mesh { .. }) => {
-            eprintln!("SKIPPED {}: the dragon mesh cannot be loaded: {e}", path.display());
-            return;
-        }
-        Err(e) => panic!("{}: {e}", path.display()),
-    };
-    if !cfg!(feature = "embree") {
-        eprintln!("SKIPPED dragon: built without Embree, and brute force cannot do 1M rays on 871k triangles");
-        return;
-    }
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let options = AccelOptions::default();
     let embree = accel::build(&scene, AccelKind::Embree, &options).unwrap();
     let kdtree = accel::build(&scene, AccelKind::KdTree, &options).unwrap();
-    if kdtree_is_scaffold(kdtree.as_ref()) {
-        eprintln!("SKIPPED dragon: the KD-tree of this build is the brute-force scaffold");
-        return;
-    }
     let report = crosscheck(
         &scene,
         embree.as_ref(),

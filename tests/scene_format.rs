@@ -402,4 +402,7 @@ fn documented_example_is_valid_up_to_its_mesh_file() {
     assert_eq!(scene.objects.len(), 7);
     assert_eq!(scene.lights.len(), 2);
     assert_eq!(scene.materials.len(), 6);
+    // And it is an example to follow: no parameter the integrator ignores.
+    let warnings = caustic::integrator::lint::material_warnings(&scene);
+    assert!(warnings.is_empty(), "{warnings:?}");
 }

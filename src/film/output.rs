@@ -98,9 +98,16 @@ pub(crate) fn write_atomically(
         }
     };
     let dir = parent_dir(path);
-    let tmp = tempfile::Builder::new()
-        .prefix(".caustic-")
-        .suffix(".tmp")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".caustic-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        // The usual mode of a new file (0666 minus the umask, applied by
+        // open(2)), not tempfile's private 0600: the mode survives the rename.
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
         .tempfile_in(&dir)
         .map_err(io("creating a temporary file in the output directory"))?;
     {
@@ -201,6 +208,27 @@ mod tests {
         // Pixel (2, 0) = (1.0, 0, 100) clamped → (255, 0, 255).
         assert_eq!(img.get_pixel(2, 0).0, [255, 0, 255]);
         assert_eq!(img.get_pixel(0, 0).0[0], 0);
+    }
+
+    /// Outputs get the mode any new file gets (0666 minus the umask), like
+    /// a file made by `File::create`, not the temporary file's private 0600.
+    #[cfg(unix)]
+    #[test]
+    fn outputs_have_the_usual_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain");
+        std::fs::File::create(&plain).unwrap();
+        let usual = std::fs::metadata(&plain).unwrap().permissions().mode() & 0o777;
+        let png = dir.path().join("out.png");
+        let exr = dir.path().join("out.exr");
+        write_png(&png, &test_film(), &OutputSettings::default()).unwrap();
+        write_exr(&exr, &test_film()).unwrap();
+        for p in [&png, &exr] {
+            let mode = std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, usual, "{}: {mode:o}, a new file gets {usual:o}", p.display());
+        }
+        assert_ne!(usual, 0o600, "the umask hides the difference; the test proves nothing");
     }
 
     #[test]

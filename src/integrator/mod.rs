@@ -4,6 +4,7 @@
 
 pub mod debug;
 pub mod fog;
+pub mod lint;
 pub mod photon;
 pub mod plan;
 pub mod render;

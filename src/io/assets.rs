@@ -365,14 +365,14 @@ mod tests {
     }
 
     #[test]
-    fn shared_copy_resolves_when_present() {
+    fn a_copy_in_a_search_directory_is_used_as_it_is() {
+        // The real asset (found or fetched), copied into a search directory.
         let name = "dragon_vrip_res4.ply.gz";
-        let dirs = search_dirs();
-        let Some(dir) = dirs.iter().find(|d| d.join(name).is_file()) else {
-            eprintln!("SKIPPED: {name} is in none of {dirs:?} (set CAUSTIC_ASSETS)");
-            return;
-        };
+        let real = resolve_asset(name).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::copy(&real, dir.path().join(name)).unwrap();
+        let dirs = vec![dir.path().to_path_buf()];
         let p = resolve_asset_in(name, &dirs, None).unwrap();
-        assert_eq!(p, dir.join(name));
+        assert_eq!(p, dir.path().join(name));
     }
 }

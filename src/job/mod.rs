@@ -19,6 +19,7 @@ pub use interrupt::Interrupt;
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, AccelStats};
 use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, OutputError};
 use crate::geometry::TriangleTest;
+use crate::integrator::lint::{self, MaterialWarning};
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
 use crate::scene::{self, Scene, SceneError};
 use std::path::{Path, PathBuf};
@@ -196,6 +197,9 @@ pub struct JobStart<'a> {
     pub resumed_samples: u64,
     /// Samples of the whole render.
     pub total_samples: u64,
+    /// Material parameters the integrator ignores, and materials that
+    /// reflect more than they receive.
+    pub warnings: &'a [MaterialWarning],
 }
 
 /// How a caller follows and stops a running job.
@@ -362,11 +366,13 @@ impl RenderJob {
         let plan = self.plan();
         let st = &self.scene.settings;
         let total_samples = st.width as u64 * st.height as u64 * st.spp as u64;
+        let warnings = lint::material_warnings(&self.scene);
         (hooks.started)(&JobStart {
             accel: &stats,
             plan: &plan,
             resumed_samples: self.start.samples_taken(),
             total_samples,
+            warnings: &warnings,
         });
         let checkpoint = self.checkpoint.as_ref();
         let save = |acc: &Accumulation| {

@@ -63,6 +63,9 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         );
     }
     println!("{}", RenderPlan::new(&scene));
+    for w in caustic::integrator::lint::material_warnings(&scene) {
+        println!("warning: {w}");
+    }
     Ok(())
 }
 

@@ -87,6 +87,9 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
             );
             eprintln!("{}", start.plan);
         }
+        for w in start.warnings {
+            eprintln!("warning: {w}");
+        }
         if let Some(path) = &resumed_from {
             eprintln!(
                 "resuming {}: {} of {} samples done",

@@ -1,0 +1,156 @@
+//! Warnings about material parameters that the Whitted integrator ignores,
+//! and about materials that reflect more light than they receive. Shown by
+//! `caustic info` and at the start of a render; they never stop a render.
+
+use crate::math::Vec3A;
+use crate::scene::{Light, Material, Scene};
+
+/// One warning about one material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialWarning {
+    /// The material's name in the scene file.
+    pub material: String,
+    /// What is wrong and why.
+    pub message: String,
+}
+
+impl std::fmt::Display for MaterialWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "material `{}`: {}", self.material, self.message)
+    }
+}
+
+fn set(c: Vec3A) -> bool {
+    c.max_element() > 0.0
+}
+
+/// The largest channel of `c` above 1 (as "1.2 in red"), if any.
+fn over_one(c: Vec3A) -> Option<String> {
+    let names = ["red", "green", "blue"];
+    let (i, v) = c
+        .to_array()
+        .into_iter()
+        .enumerate()
+        .fold(None, |best: Option<(usize, f32)>, (i, v)| match best {
+            Some((_, b)) if b >= v => best,
+            _ => Some((i, v)),
+        })?;
+    (v > 1.0 + 1e-6).then(|| format!("{v:.3} in {}", names[i]))
+}
+
+/// Warnings for every material used by an object of `scene`.
+pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
+    let has_point_light = scene.lights.iter().any(|l| matches!(l, Light::Point { .. }));
+    let mut used = vec![false; scene.materials.len()];
+    for o in &scene.objects {
+        used[o.material as usize] = true;
+    }
+    scene
+        .materials
+        .iter()
+        .zip(used)
+        .filter(|(_, used)| *used)
+        .flat_map(|(m, _)| {
+            warnings_of(m, has_point_light)
+                .into_iter()
+                .map(|message| MaterialWarning {
+                    material: m.name.clone(),
+                    message,
+                })
+        })
+        .collect()
+}
+
+fn warnings_of(m: &Material, has_point_light: bool) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(d) = m.dielectric {
+        if set(m.diffuse) {
+            out.push("`diffuse` is ignored: a dielectric has no diffuse term".into());
+        } else if set(m.ambient) {
+            out.push("`ambient` is ignored: a dielectric has no ambient term".into());
+        }
+        if set(m.specular) && !has_point_light {
+            out.push(
+                "`specular` is ignored: a dielectric keeps the highlight of point lights only and the scene has \
+                 none (area lights appear in its reflection)"
+                    .into(),
+            );
+        }
+        if let Some(c) = over_one(d.tint) {
+            out.push(format!("`dielectric.tint` transmits more light than it receives ({c})"));
+        }
+        return out;
+    }
+    let r = m.mirror.map_or(0.0, |mi| mi.reflectivity);
+    if let Some(mi) = m.mirror {
+        if r <= 0.0 {
+            out.push("`mirror` has no effect: its reflectivity is 0".into());
+        } else if r >= 1.0 {
+            let dead: Vec<&str> = [("diffuse", m.diffuse), ("specular", m.specular), ("ambient", m.ambient)]
+                .into_iter()
+                .filter(|(_, c)| set(*c))
+                .map(|(name, _)| name)
+                .collect();
+            if !dead.is_empty() {
+                out.push(format!(
+                    "`{}` {} ignored: a perfect mirror (reflectivity 1) shows only its reflection",
+                    dead.join("`, `"),
+                    if dead.len() == 1 { "is" } else { "are" }
+                ));
+            }
+        }
+        if let Some(c) = over_one(mi.tint) {
+            out.push(format!("`mirror.tint` reflects more light than it receives ({c})"));
+        }
+    }
+    // The normalised lobes reflect at most their reflectance each (module
+    // docs of `integrator::whitted`), so their sum bounds the albedo.
+    if r < 1.0 {
+        if let Some(c) = over_one(m.diffuse + m.specular) {
+            out.push(format!(
+                "reflects more light than it receives: `diffuse` + `specular` = {c} (keep the sum at most 1 per channel)"
+            ));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Dielectric, Mirror};
+
+    #[test]
+    fn dead_and_energy_gaining_parameters_are_named() {
+        let mut glass = Material::diffuse("glass", Vec3A::ZERO);
+        glass.specular = Vec3A::splat(0.8);
+        glass.dielectric = Some(Dielectric {
+            ior: 1.5,
+            tint: Vec3A::ONE,
+        });
+        let w = warnings_of(&glass, false);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("point lights only"));
+        assert!(warnings_of(&glass, true).is_empty());
+
+        let mut mirror = Material::diffuse("mirror", Vec3A::ZERO);
+        mirror.specular = Vec3A::splat(0.6);
+        mirror.mirror = Some(Mirror {
+            reflectivity: 1.0,
+            tint: Vec3A::ONE,
+        });
+        let w = warnings_of(&mirror, true);
+        assert_eq!(
+            w,
+            vec!["`specular` is ignored: a perfect mirror (reflectivity 1) shows only its reflection"]
+        );
+
+        let mut bright = Material::diffuse("bright", Vec3A::new(0.8, 0.5, 0.5));
+        bright.specular = Vec3A::new(0.4, 0.4, 0.4);
+        let w = warnings_of(&bright, true);
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("1.200 in red"), "{w:?}");
+
+        assert!(warnings_of(&Material::diffuse("ok", Vec3A::splat(0.9)), true).is_empty());
+    }
+}
