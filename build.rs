@@ -1,4 +1,4 @@
-//! Finds Intel Embree 4 for the `embree` feature (DESIGN.md, section Embree).
+//! Finds Intel Embree 4 for the `embree` feature.
 //!
 //! Order: (1) a system Embree 4 through `pkg-config embree4`; (2) `EMBREE_DIR`
 //! (its `lib/`, `lib64/` or the directory itself); (3) the pinned, hash-checked
@@ -15,7 +15,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The wheel pinned by DESIGN.md: Embree 4.4.0 with its bundled TBB.
+/// The pinned wheel: Embree 4.4.0 with its bundled TBB.
 const WHEEL_REQUIREMENT: &str = "embreex==4.4.0.post1";
 const WHEEL_SHA256: &str = "2cd0f7d5c6342e6247e31f700761689cae7829454d8c6de0c41e62124a023e1f";
 const WHEEL_PLATFORM: &str = "manylinux_2_28_x86_64";

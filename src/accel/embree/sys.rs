@@ -1,8 +1,8 @@
 //! Hand-written bindings for the part of Intel Embree 4's C API (`rtcore.h`)
 //! that caustic uses. No bindgen: a fresh machine has no libclang, and the
-//! headers are not needed at all (DESIGN.md, section Embree). Values and
-//! layouts follow `embree4/rtcore_{common,device,buffer,geometry,scene,ray}.h`
-//! of Embree 4.4; the layout tests below pin them.
+//! headers are not needed at all. Values and layouts follow
+//! `embree4/rtcore_{common,device,buffer,geometry,scene,ray}.h` of Embree 4.4;
+//! the layout tests below pin them.
 //!
 //! The library is linked by `build.rs` (`cargo:rustc-link-lib`), which is why
 //! the `extern` block carries no `#[link]` attribute: the file name differs

@@ -1,0 +1,134 @@
+//! The analytic shapes (spheres, quads) as Embree user geometries: their
+//! bounds, intersect and occluded callbacks, which call the scene's own
+//! intersection code.
+
+use super::sys;
+use crate::math::{Aabb, Ray, Vec3A};
+use crate::scene::{Quad, Sphere};
+
+/// An analytic shape in the TLAS (user geometry data).
+#[derive(Clone, Copy, Debug)]
+pub(super) enum AnalyticShape {
+    Sphere(Sphere),
+    Quad(Quad),
+}
+
+impl AnalyticShape {
+    /// `(t, u, v)` exactly as the other backends report it.
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        match self {
+            AnalyticShape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, 0.0, 0.0)),
+            AnalyticShape::Quad(q) => q.intersect(ray, t_max),
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        match self {
+            AnalyticShape::Sphere(s) => s.bounds(),
+            AnalyticShape::Quad(q) => q.bounds(),
+        }
+    }
+}
+
+/// `RTCBoundsFunction`: the shape's box, widened by a few ulps of its
+/// magnitude so rounding in the corner sums cannot cull a hit on the boundary.
+pub(super) unsafe extern "C" fn analytic_bounds(args: *const sys::RTCBoundsFunctionArguments) {
+    // SAFETY: Embree passes valid arguments; `geometryUserPtr` is the
+    // `AnalyticShape` kept alive by the scene; `bounds_o` is writable.
+    let (shape, out) = unsafe {
+        let args = &*args;
+        (&*(args.geometryUserPtr as *const AnalyticShape), &mut *args.bounds_o)
+    };
+    let b = shape.bounds();
+    let pad = (b.min.abs().max(b.max.abs())) * (4.0 * f32::EPSILON) + Vec3A::splat(f32::MIN_POSITIVE);
+    let (lo, hi) = (b.min - pad, b.max + pad);
+    *out = sys::RTCBounds {
+        lower_x: lo.x,
+        lower_y: lo.y,
+        lower_z: lo.z,
+        align0: 0.0,
+        upper_x: hi.x,
+        upper_y: hi.y,
+        upper_z: hi.z,
+        align1: 0.0,
+    };
+}
+
+/// Reads ray `i` of an `RTCRayN` with `n` lanes (structure of arrays:
+/// field `k` of lane `i` is float `k·n + i`): `(ray, tnear, tfar)`.
+///
+/// # Safety
+/// `base` must point to an `RTCRayN` with at least `n` lanes and `i < n`.
+#[inline]
+unsafe fn read_ray_n(base: *const f32, n: usize, i: usize) -> (Ray, f32, f32) {
+    // SAFETY: per the function contract, indices k·n + i for k ≤ 8 are in bounds.
+    unsafe {
+        let f = |k: usize| *base.add(k * n + i);
+        (
+            Ray::new(Vec3A::new(f(0), f(1), f(2)), Vec3A::new(f(4), f(5), f(6))),
+            f(3),
+            f(8),
+        )
+    }
+}
+
+/// `RTCIntersectFunctionN` of the analytic shapes.
+pub(super) unsafe extern "C" fn analytic_intersect(args: *const sys::RTCIntersectFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments: `valid` has `N` entries,
+    // `rayhit` is an RTCRayHitN with `N` lanes (ray: floats 0..12N, hit:
+    // from float 12N), and `geometryUserPtr` is our live `AnalyticShape`.
+    unsafe {
+        let args = &*args;
+        let shape = &*(args.geometryUserPtr as *const AnalyticShape);
+        let n = args.N as usize;
+        let base = args.rayhit as *mut f32;
+        for i in 0..n {
+            if *args.valid.add(i) == 0 {
+                continue;
+            }
+            let (ray, tnear, tfar) = read_ray_n(base, n, i);
+            let Some((t, u, v)) = shape.intersect(&ray, tfar) else {
+                continue;
+            };
+            if t < tnear {
+                continue;
+            }
+            *base.add(8 * n + i) = t;
+            let hit = base.add(12 * n);
+            // Geometric normal is not used by caustic (the scene recomputes it).
+            *hit.add(i) = 0.0;
+            *hit.add(n + i) = 0.0;
+            *hit.add(2 * n + i) = 0.0;
+            *hit.add(3 * n + i) = u;
+            *hit.add(4 * n + i) = v;
+            let ids = hit as *mut u32;
+            *ids.add(5 * n + i) = args.primID;
+            *ids.add(6 * n + i) = args.geomID;
+            // Analytic shapes live only in the TLAS: no enclosing instance.
+            *ids.add(7 * n + i) = sys::RTC_INVALID_GEOMETRY_ID;
+        }
+    }
+}
+
+/// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit.
+pub(super) unsafe extern "C" fn analytic_occluded(args: *const sys::RTCOccludedFunctionNArguments) {
+    // SAFETY: as in `analytic_intersect`, with `ray` an RTCRayN of `N` lanes.
+    unsafe {
+        let args = &*args;
+        let shape = &*(args.geometryUserPtr as *const AnalyticShape);
+        let n = args.N as usize;
+        let base = args.ray as *mut f32;
+        for i in 0..n {
+            if *args.valid.add(i) == 0 {
+                continue;
+            }
+            let (ray, tnear, tfar) = read_ray_n(base, n, i);
+            if let Some((t, _, _)) = shape.intersect(&ray, tfar) {
+                if t >= tnear {
+                    *base.add(8 * n + i) = f32::NEG_INFINITY;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,177 @@
+//! Scene description to validated scene.
+//!
+//! [`load_scene`] reads a TOML file (bounded in size), [`parse_scene`] parses
+//! it into a [`SceneDesc`] (serde, every table `deny_unknown_fields`) and then
+//! checks every value before building the immutable [`Scene`]. Every error is
+//! a [`SceneError`] whose message starts with `file:line:column:` when the
+//! problem has a place in the file (toml's byte spans, converted here so that
+//! syntax, type and semantic errors all read the same way).
+//!
+//! Meshes are resolved relative to the scene file (or as `asset:NAME`), keyed
+//! by canonical path so that a file used by several objects is loaded once,
+//! loaded in parallel, and shared by `Arc`.
+//!
+//! The checks are split by what they check: `ctx` holds the file being
+//! checked and the checks of single values, `settings` the `[render]`,
+//! `[photons]` and `[camera]` tables, `materials` and `lights` theirs,
+//! `objects` the objects, their mesh files, water surfaces and the
+//! `[medium]`; `error` defines [`SceneError`] and [`Place`].
+
+mod ctx;
+mod error;
+mod lights;
+mod materials;
+mod objects;
+mod settings;
+
+pub use ctx::MAX_MAGNITUDE;
+pub use error::{Place, SceneError};
+pub use lights::{DEFAULT_AREA_LIGHT_SAMPLES, MAX_AREA_LIGHT_SAMPLES};
+pub use materials::{DEFAULT_DIFFUSE, DEFAULT_IOR, DEFAULT_SHININESS};
+pub use objects::DEFAULT_WATER_RESOLUTION;
+pub use settings::{DEFAULT_VFOV_DEG, MAX_DEPTH, MAX_EXPOSURE_STOPS, MAX_PHOTON_GATHER};
+
+use crate::geometry::water::WaterSurface;
+use crate::scene::desc::{ObjectKind, SceneDesc};
+use crate::scene::{Object, Scene, Shape};
+use ctx::Ctx;
+use std::io::Read;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Largest scene file read (bytes). Scene files are small text; the bound
+/// keeps a wrong path (`/dev/zero`, a huge binary) from exhausting memory.
+pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
+
+/// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
+/// Relative mesh paths are resolved against the scene file's directory.
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let read_error = |error| SceneError::Read {
+        path: path.into(),
+        error,
+    };
+    let meta = std::fs::metadata(path).map_err(read_error)?;
+    if meta.is_dir() {
+        return Err(SceneError::Directory { path: path.into() });
+    }
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(read_error)?;
+    if bytes.len() as u64 > MAX_SCENE_FILE_BYTES {
+        return Err(SceneError::TooLarge {
+            path: path.into(),
+            limit: MAX_SCENE_FILE_BYTES,
+        });
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let text = std::str::from_utf8(&e.as_bytes()[..valid]).unwrap_or_default();
+        SceneError::NotUtf8 {
+            path: path.into(),
+            place: Place::of_offset(text, valid),
+        }
+    })?;
+    parse_scene(&text, path)
+}
+
+/// Parses and validates scene text. `path` names the file in messages, and
+/// relative mesh paths are resolved against its directory.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let ctx = Ctx { text, path };
+    let desc: SceneDesc = toml::from_str(text).map_err(|e| SceneError::Toml {
+        path: path.into(),
+        place: e.span().map(|s| Place::of_offset(text, s.start)),
+        // One line, like every other message (toml puts the expectation on a second line).
+        message: e.message().trim().lines().map(str::trim).collect::<Vec<_>>().join(": "),
+    })?;
+    let mut settings = ctx.render(&desc.render)?;
+    settings.photons = ctx.photons(&desc.photons)?;
+    let camera = ctx.camera(&desc.camera)?;
+    let (materials, material_index) = ctx.materials(&desc.materials)?;
+    let lights = desc
+        .lights
+        .iter()
+        .map(|l| ctx.light(l))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    // Objects: everything but the meshes' contents, so that cheap mistakes
+    // are reported before any mesh file is read.
+    let mut objects = Vec::with_capacity(desc.objects.len());
+    let mut mesh_refs = Vec::new();
+    let mut waters: Vec<(usize, WaterSurface)> = Vec::new();
+    for (i, o) in desc.objects.iter().enumerate() {
+        let material =
+            *material_index
+                .get(o.material.get_ref().as_str())
+                .ok_or_else(|| SceneError::UnknownMaterial {
+                    path: path.into(),
+                    place: ctx.place(o.material.span()),
+                    name: o.material.get_ref().clone(),
+                    known: material_index.keys().map(|k| k.to_string()).collect(),
+                })?;
+        let name = o
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("{}#{i}", kind_name(*o.kind.get_ref())));
+        let shape = match o.kind.get_ref() {
+            ObjectKind::Sphere => ctx.sphere(o)?,
+            ObjectKind::Quad => ctx.quad(o)?,
+            ObjectKind::Water => {
+                waters.push((i, ctx.water(o)?));
+                // The generated mesh is appended after the files' meshes.
+                Shape::Mesh {
+                    mesh: u32::MAX,
+                    transform: crate::math::Transform::IDENTITY,
+                    smooth: true,
+                }
+            }
+            ObjectKind::Mesh => {
+                let (file, transform, smooth) = ctx.mesh_instance(o)?;
+                mesh_refs.push((i, file));
+                // The mesh index is filled in once the distinct files are known.
+                Shape::Mesh {
+                    mesh: u32::MAX,
+                    transform,
+                    smooth,
+                }
+            }
+        };
+        objects.push(Object { name, shape, material });
+    }
+    let mut meshes = ctx.load_meshes(&mut objects, &mesh_refs)?;
+    for (object, surface) in &waters {
+        let mesh = surface.mesh(&objects[*object].name).map_err(|e| {
+            ctx.invalid(
+                desc.objects[*object].kind.span(),
+                format!("water surface `{}`: {e}", objects[*object].name),
+            )
+        })?;
+        if let Shape::Mesh { mesh: index, .. } = &mut objects[*object].shape {
+            *index = meshes.len() as u32;
+        }
+        meshes.push(Arc::new(mesh));
+    }
+    let mut scene = Scene {
+        settings,
+        camera,
+        materials,
+        lights,
+        meshes,
+        objects,
+    };
+    if let Some(m) = &desc.medium {
+        scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(_, w)| w), scene.bounds())?);
+    }
+    Ok(scene)
+}
+
+fn kind_name(kind: ObjectKind) -> &'static str {
+    match kind {
+        ObjectKind::Sphere => "sphere",
+        ObjectKind::Quad => "quad",
+        ObjectKind::Mesh => "mesh",
+        ObjectKind::Water => "water",
+    }
+}

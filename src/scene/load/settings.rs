@@ -1,0 +1,199 @@
+//! The `[render]`, `[photons]` and `[camera]` tables: render settings, photon
+//! map settings and the camera, with their limits and defaults.
+
+use super::ctx::Ctx;
+use super::error::SceneError;
+use crate::film::{OutputSettings, ToneMap};
+use crate::geometry::TriangleTest;
+use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
+use crate::math::Vec3A;
+use crate::scene::desc::{
+    CameraDesc, GatherName, PhotonsDesc, RenderDesc, SharingName, Spanned, ToneMapName, TriangleTestName,
+};
+use crate::scene::{Camera, GatherMode, PhotonSettings, RenderSettings, SampleSharing};
+
+/// Largest `max_depth`.
+pub const MAX_DEPTH: u32 = 64;
+/// Largest magnitude of `exposure` in stops (2^64 is still finite in f32).
+pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
+/// Largest `k` of the photon gather.
+pub const MAX_PHOTON_GATHER: u32 = 100_000;
+
+/// Default vertical field of view (degrees).
+pub const DEFAULT_VFOV_DEG: f32 = 45.0;
+
+impl Ctx<'_> {
+    pub(super) fn render(&self, r: &RenderDesc) -> Result<RenderSettings, SceneError> {
+        let d = RenderSettings::default();
+        let int = |s: &Option<Spanned<u32>>, default: u32, key: &str, min: u32, max: u32| match s {
+            None => Ok(default),
+            Some(s) if (min..=max).contains(s.get_ref()) => Ok(*s.get_ref()),
+            Some(s) => Err(self.invalid(
+                s.span(),
+                format!("`{key}` = {} is out of range: it must be in {min}..={max}", s.get_ref()),
+            )),
+        };
+        let width = int(&r.width, d.width, "width", 1, MAX_IMAGE_SIDE)?;
+        let height = int(&r.height, d.height, "height", 1, MAX_IMAGE_SIDE)?;
+        let spp = int(&r.spp, d.spp, "spp", 1, u32::MAX)?;
+        let max_depth = int(&r.max_depth, d.max_depth, "max_depth", 0, MAX_DEPTH)?;
+        // Point at the key that makes the product too large (the first given).
+        let size_span = [&r.width, &r.height, &r.spp]
+            .into_iter()
+            .flatten()
+            .map(|s| s.span())
+            .next()
+            .unwrap_or(0..0);
+        if let Err(e) = check_image_limits(width, height, spp) {
+            let span = match e {
+                ImageLimit::Samples(_) => r.spp.as_ref().map_or(size_span, |s| s.span()),
+                ImageLimit::Film(_) => size_span,
+            };
+            return Err(self.invalid(span, e.to_string()));
+        }
+        let exposure = match &r.exposure {
+            None => d.output.exposure,
+            Some(s) => {
+                let e = self.number(s, "exposure")?;
+                if f64::from(e).abs() > MAX_EXPOSURE_STOPS {
+                    return Err(self.invalid(
+                        s.span(),
+                        format!("`exposure` = {e} stops is out of range (±{MAX_EXPOSURE_STOPS})"),
+                    ));
+                }
+                e
+            }
+        };
+        let ambient = match &r.ambient {
+            None => d.ambient,
+            Some(s) => self.colour(s, "ambient")?,
+        };
+        Ok(RenderSettings {
+            width,
+            height,
+            spp,
+            max_depth,
+            seed: r.seed.unwrap_or(d.seed),
+            output: OutputSettings {
+                tone_map: match r.tone_map {
+                    None => d.output.tone_map,
+                    Some(ToneMapName::Aces) => ToneMap::Aces,
+                    Some(ToneMapName::Clamp) => ToneMap::Clamp,
+                },
+                exposure,
+            },
+            ambient,
+            triangle_test: match r.triangle_test {
+                None => d.triangle_test,
+                Some(TriangleTestName::Watertight) => TriangleTest::Watertight,
+                Some(TriangleTestName::MollerTrumbore) => TriangleTest::MollerTrumbore,
+            },
+            sharing: match r.sharing {
+                None => d.sharing,
+                Some(SharingName::Spread) => SampleSharing::Spread,
+                Some(SharingName::Split) => SampleSharing::Split,
+            },
+            photons: d.photons,
+            medium: None,
+        })
+    }
+
+    pub(super) fn camera(&self, c: &CameraDesc) -> Result<Camera, SceneError> {
+        let position = self.vec3(&c.position, "position")?;
+        let look_at = self.vec3(&c.look_at, "look_at")?;
+        let forward = (look_at - position).try_normalize().ok_or_else(|| {
+            self.invalid(
+                c.look_at.span(),
+                "`look_at` equals the camera `position`: the camera has no viewing direction",
+            )
+        })?;
+        let up = match &c.up {
+            Some(s) => self.direction(s, "up")?,
+            None => Vec3A::Y,
+        };
+        // Parallel when the sine of the angle is below ~1e-4 (0.006°): the
+        // right vector would then be dominated by rounding.
+        if forward.cross(up.normalize()).length() < 1e-4 {
+            let (span, what) = match &c.up {
+                Some(s) => (s.span(), "`up`"),
+                None => (c.look_at.span(), "the default `up` [0, 1, 0]"),
+            };
+            return Err(self.invalid(
+                span,
+                format!("{what} is parallel to the viewing direction (`look_at` − `position`): choose another `up`"),
+            ));
+        }
+        let vfov = match &c.vfov {
+            None => DEFAULT_VFOV_DEG,
+            Some(s) => {
+                let v = self.number(s, "vfov")?;
+                if !(v > 0.0 && v < 180.0) {
+                    return Err(self.invalid(s.span(), format!("`vfov` = {v}° must be in (0, 180) degrees")));
+                }
+                v
+            }
+        };
+        Camera::new(position, look_at, up, vfov)
+            .ok_or_else(|| self.invalid(c.position.span(), "the camera is degenerate"))
+    }
+
+    /// `[photons]`.
+    pub(super) fn photons(&self, p: &PhotonsDesc) -> Result<PhotonSettings, SceneError> {
+        let d = PhotonSettings::default();
+        let count = match &p.count {
+            None => d.count,
+            Some(c) => {
+                let n = *c.get_ref();
+                if n < 0 {
+                    return Err(self.invalid(c.span(), format!("photon `count` = {n} must be ≥ 0")));
+                }
+                check_photon_count(n as u64).map_err(|e| self.invalid(c.span(), e))?;
+                n as u64
+            }
+        };
+        let k = match &p.k {
+            None => d.k,
+            Some(k) if (1..=MAX_PHOTON_GATHER as i64).contains(k.get_ref()) => *k.get_ref() as u32,
+            Some(k) => {
+                return Err(self.invalid(
+                    k.span(),
+                    format!("photon `k` = {} must be in 1..={MAX_PHOTON_GATHER}", k.get_ref()),
+                ))
+            }
+        };
+        let max_radius = match &p.max_radius {
+            None => d.max_radius,
+            Some(r) => {
+                let x = self.number(r, "max_radius")?;
+                if x <= 0.0 {
+                    return Err(self.invalid(r.span(), format!("`max_radius` = {x} must be > 0")));
+                }
+                Some(x)
+            }
+        };
+        let cone_k = match &p.cone_k {
+            None => d.cone_k,
+            Some(c) => {
+                let x = self.number(c, "cone_k")?;
+                if x < 1.0 {
+                    return Err(self.invalid(
+                        c.span(),
+                        format!("`cone_k` = {x} must be ≥ 1 (the cone filter's weight 1 − d/(k·r) must stay ≥ 0)"),
+                    ));
+                }
+                x
+            }
+        };
+        Ok(PhotonSettings {
+            count,
+            k,
+            max_radius,
+            cone_k,
+            gather: match p.gather {
+                None => d.gather,
+                Some(GatherName::Precomputed) => GatherMode::Precomputed,
+                Some(GatherName::Direct) => GatherMode::Direct,
+            },
+        })
+    }
+}
