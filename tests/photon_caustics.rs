@@ -103,10 +103,7 @@ fn mirror_caustic_carries_the_expected_energy() {
 /// A glass sphere over a floor under a point light: its caustic.
 fn glass_scene(count: u64) -> Scene {
     let glass = Material {
-        dielectric: Some(Dielectric {
-            ior: 1.5,
-            tint: Vec3A::ONE,
-        }),
+        dielectric: Some(Dielectric::smooth(1.5, Vec3A::ONE)),
         ..Material::diffuse("glass", Vec3A::ZERO)
     };
     let mut settings = RenderSettings {

@@ -172,10 +172,7 @@ fn a_mirror_shows_the_reflected_objects_colour() {
 
 fn glass() -> Material {
     Material {
-        dielectric: Some(Dielectric {
-            ior: 1.5,
-            tint: Vec3A::ONE,
-        }),
+        dielectric: Some(Dielectric::smooth(1.5, Vec3A::ONE)),
         specular: Vec3A::ZERO,
         ..Material::diffuse("glass", Vec3A::ZERO)
     }
@@ -215,7 +212,7 @@ fn a_glass_sphere_refracts_and_is_not_black_at_its_centre() {
     assert!(c.x > 0.6 * wall && c.x < 1.05 * wall, "centre {c}, wall {wall}");
     // The rim reflects at grazing angles and is not empty either; and the
     // glass really is what makes the centre bright: no bounces → black.
-    scene.settings.max_depth = 0;
+    scene.settings.max_depth = Some(0);
     let flat = render_scene(&scene).film.get(16, 16);
     assert_eq!(flat, Vec3::ZERO);
 }

@@ -110,7 +110,7 @@ fn every_documented_key_is_parsed() {
     let r = &s.settings;
     assert_eq!(
         (r.width, r.height, r.spp, r.max_depth, r.seed),
-        (320, 200, 9, 6, 1234567890123)
+        (320, 200, 9, Some(6), 1234567890123)
     );
     assert_eq!(r.output.tone_map, ToneMap::Clamp);
     assert_eq!(r.output.exposure, -1.5);
@@ -226,7 +226,7 @@ v = [0, 0, 1]
 "#,
     );
     let r = &s.settings;
-    assert_eq!((r.width, r.height, r.spp, r.max_depth, r.seed), (640, 480, 1, 8, 0));
+    assert_eq!((r.width, r.height, r.spp, r.max_depth, r.seed), (640, 480, 1, None, 0));
     assert_eq!(r.output.tone_map, ToneMap::Aces);
     assert_eq!(r.output.exposure, 0.0);
     assert_eq!(r.ambient, Vec3A::ZERO);

@@ -1,9 +1,339 @@
-//! Light scattering at surfaces, shared by the camera paths of every
-//! integrator and by the photon tracer, so that both see the same surfaces.
+//! Light scattering at surfaces, written once for every integrator and the
+//! photon tracer.
 //!
-//! [`specular`]: perfect reflection, Snell refraction and Fresnel
-//! reflectance at smooth interfaces.
+//! A [`Bsdf`] is built per shading point from a material
+//! ([`Bsdf::for_material`]) and works in the local shading frame (+z is the
+//! outward shading normal), with pbrt's conventions: `wo` leaves toward the
+//! viewer (or the previous path vertex), `wi` toward the light;
+//! [`Bsdf::eval`] and [`Bsdf::pdf`] cover the non-delta lobes; a sample's
+//! throughput factor is `f |cos θi| / pdf`, delta lobes included (their
+//! `pdf` is the probability of choosing them).
+//!
+//! Lobes: [`phong`] (the original report's Lambert, Phong / Blinn-Phong and
+//! mirror), [`dielectric`] (smooth and rough glass), [`conductor`] (smooth
+//! and rough metals; named presets in `scene::metals`), [`plastic`] (coated diffuse);
+//! [`fresnel`] and [`microfacet`] are their building blocks; [`specular`]
+//! holds the world-space reflection and refraction shared with the Whitted
+//! integrator and the photon tracer.
 
+pub mod conductor;
+pub mod dielectric;
+pub mod fresnel;
+pub mod microfacet;
+pub mod phong;
+pub mod plastic;
 pub mod specular;
 
+pub use crate::scene::FresnelModel;
 pub use specular::{fresnel_schlick, reflect, refract, DielectricInterface};
+
+use crate::math::{Vec2, Vec3A};
+use crate::scene::Material;
+use conductor::{RoughConductor, SmoothConductor};
+use dielectric::{RoughDielectric, SmoothDielectric};
+use microfacet::{Ggx, SMOOTH_ALPHA};
+use phong::{Highlight, Lambert, Mirror};
+use plastic::Plastic;
+
+/// What a path carries: radiance from the camera, or power (importance)
+/// from a light (photons). Only refraction tells them apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    /// Camera paths.
+    Radiance,
+    /// Light paths (photons).
+    Importance,
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// Direction toward the next vertex (local frame).
+    pub wi: Vec3A,
+    /// BSDF value (for a delta lobe: its weight divided by `|cos θi|`).
+    pub f: Vec3A,
+    /// Solid-angle density, or for a delta lobe the probability of choosing it.
+    pub pdf: f32,
+    /// From a delta lobe (mirror, smooth glass).
+    pub delta: bool,
+    /// Through the surface.
+    pub transmission: bool,
+    /// Ratio ηt/ηi of the indices across a refraction (1 otherwise).
+    pub eta: f32,
+}
+
+impl BsdfSample {
+    fn glossy(wi: Vec3A, f: Vec3A, pdf: f32) -> Self {
+        Self {
+            wi,
+            f,
+            pdf,
+            delta: false,
+            transmission: false,
+            eta: 1.0,
+        }
+    }
+
+    fn specular(wi: Vec3A, f: Vec3A, pdf: f32) -> Self {
+        Self {
+            delta: true,
+            ..Self::glossy(wi, f, pdf)
+        }
+    }
+
+    /// The throughput factor `f |cos θi| / pdf`.
+    pub fn weight(&self) -> Vec3A {
+        if self.pdf > 0.0 {
+            self.f * (self.wi.z.abs() / self.pdf)
+        } else {
+            Vec3A::ZERO
+        }
+    }
+}
+
+/// One lobe of a material.
+#[derive(Clone, Copy, Debug)]
+enum Lobe {
+    Lambert(Lambert),
+    Highlight(Highlight),
+    Mirror(Mirror),
+    SmoothDielectric(SmoothDielectric),
+    RoughDielectric(RoughDielectric),
+    SmoothConductor(SmoothConductor),
+    RoughConductor(RoughConductor),
+    Plastic(Plastic),
+}
+
+impl Lobe {
+    fn eval(&self, wo: Vec3A, wi: Vec3A, transport: Transport) -> Vec3A {
+        match self {
+            Lobe::Lambert(l) => l.eval(wo, wi),
+            Lobe::Highlight(h) => h.eval(wo, wi),
+            Lobe::RoughDielectric(d) => d.eval(wo, wi, transport),
+            Lobe::RoughConductor(c) => c.eval(wo, wi),
+            Lobe::Plastic(p) => p.eval(wo, wi),
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => Vec3A::ZERO,
+        }
+    }
+
+    fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        match self {
+            Lobe::Lambert(l) => l.pdf(wo, wi),
+            Lobe::Highlight(h) => h.pdf(wo, wi),
+            Lobe::RoughDielectric(d) => d.pdf(wo, wi),
+            Lobe::RoughConductor(c) => c.pdf(wo, wi),
+            Lobe::Plastic(p) => p.pdf(wo, wi),
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 0.0,
+        }
+    }
+
+    fn sample(&self, wo: Vec3A, uc: f32, u: Vec2, transport: Transport) -> Option<BsdfSample> {
+        match self {
+            Lobe::Lambert(l) => l.sample(wo, u),
+            Lobe::Highlight(h) => h.sample(wo, u),
+            Lobe::Mirror(m) => m.sample(wo),
+            Lobe::SmoothDielectric(d) => d.sample(wo, uc, transport),
+            Lobe::RoughDielectric(d) => d.sample(wo, uc, u, transport),
+            Lobe::SmoothConductor(c) => c.sample(wo),
+            Lobe::RoughConductor(c) => c.sample(wo, u),
+            Lobe::Plastic(p) => p.sample(wo, uc, u),
+        }
+    }
+
+    /// Has a lobe that is not a delta (worth sampling lights for).
+    fn is_smooth_only(&self) -> bool {
+        matches!(
+            self,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_)
+        )
+    }
+}
+
+/// Most lobes of one material (Lambert, highlight, mirror).
+const MAX_LOBES: usize = 3;
+
+/// The scattering of one material at one shading point: a mixture of lobes,
+/// one chosen per sample with a probability proportional to its mean
+/// reflectance.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    lobes: [(Lobe, f32); MAX_LOBES],
+    count: usize,
+    /// Reflection-only materials scatter the same on both sides (the
+    /// frame is flipped toward `wo`); dielectrics tell inside from outside.
+    two_sided: bool,
+    transport: Transport,
+}
+
+fn mean(c: Vec3A) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
+fn ggx_or_smooth(roughness: f32) -> Option<Ggx> {
+    (roughness >= SMOOTH_ALPHA).then_some(Ggx { alpha: roughness })
+}
+
+impl Bsdf {
+    /// The BSDF of `m`, with `default_fresnel` for dielectrics that do not
+    /// name a Fresnel formula.
+    pub fn for_material(m: &Material, default_fresnel: FresnelModel, transport: Transport) -> Self {
+        let mut b = Self {
+            lobes: [(Lobe::Lambert(Lambert { kd: Vec3A::ZERO }), 0.0); MAX_LOBES],
+            count: 0,
+            two_sided: true,
+            transport,
+        };
+        if let Some(d) = m.dielectric {
+            b.two_sided = false;
+            let tint = d.tint;
+            let lobe = match ggx_or_smooth(d.roughness) {
+                None => Lobe::SmoothDielectric(SmoothDielectric {
+                    eta: d.ior,
+                    tint,
+                    fresnel: d.fresnel.unwrap_or(default_fresnel),
+                }),
+                Some(ggx) => Lobe::RoughDielectric(RoughDielectric { eta: d.ior, tint, ggx }),
+            };
+            b.push(lobe, 1.0);
+        } else if let Some(c) = m.conductor {
+            let lobe = match ggx_or_smooth(c.roughness) {
+                None => Lobe::SmoothConductor(SmoothConductor { eta: c.eta, k: c.k }),
+                Some(ggx) => Lobe::RoughConductor(RoughConductor {
+                    eta: c.eta,
+                    k: c.k,
+                    ggx,
+                }),
+            };
+            b.push(lobe, 1.0);
+        } else if let Some(c) = m.coating {
+            b.push(
+                Lobe::Plastic(Plastic {
+                    kd: m.diffuse,
+                    eta: c.ior,
+                }),
+                1.0,
+            );
+        } else {
+            let r = m.mirror.map_or(0.0, |mi| mi.reflectivity);
+            let kd = m.diffuse * (1.0 - r);
+            let ks = m.specular * (1.0 - r);
+            b.push(Lobe::Lambert(Lambert { kd }), mean(kd));
+            b.push(
+                Lobe::Highlight(Highlight {
+                    ks,
+                    n: m.shininess,
+                    model: m.model,
+                }),
+                mean(ks),
+            );
+            if let Some(mi) = m.mirror {
+                let tint = mi.tint * r;
+                b.push(Lobe::Mirror(Mirror { tint }), mean(tint));
+            }
+        }
+        b
+    }
+
+    fn push(&mut self, lobe: Lobe, weight: f32) {
+        if weight > 0.0 && self.count < MAX_LOBES {
+            self.lobes[self.count] = (lobe, weight);
+            self.count += 1;
+        }
+    }
+
+    fn lobes(&self) -> &[(Lobe, f32)] {
+        &self.lobes[..self.count]
+    }
+
+    fn total_weight(&self) -> f32 {
+        self.lobes().iter().map(|(_, w)| w).sum()
+    }
+
+    /// Scatters nothing (a black material).
+    pub fn is_black(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Has a non-delta lobe: light sampling can find it.
+    pub fn has_smooth_lobe(&self) -> bool {
+        self.lobes().iter().any(|(l, _)| !l.is_smooth_only())
+    }
+
+    /// Only delta lobes (mirror, smooth glass or metal).
+    pub fn is_delta(&self) -> bool {
+        !self.is_black() && !self.has_smooth_lobe()
+    }
+
+    /// Reflection-only materials are seen the same from both sides.
+    fn oriented(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, Vec3A) {
+        if self.two_sided && wo.z < 0.0 {
+            (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z))
+        } else {
+            (wo, wi)
+        }
+    }
+
+    /// The BSDF value of the non-delta lobes.
+    pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
+        let (wo, wi) = self.oriented(wo, wi);
+        self.lobes()
+            .iter()
+            .fold(Vec3A::ZERO, |f, (l, _)| f + l.eval(wo, wi, self.transport))
+    }
+
+    /// Solid-angle density with which [`sample`](Self::sample) picks `wi`
+    /// through a non-delta lobe.
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        let (wo, wi) = self.oriented(wo, wi);
+        let total = self.total_weight();
+        if total <= 0.0 {
+            return 0.0;
+        }
+        self.lobes().iter().map(|(l, w)| w / total * l.pdf(wo, wi)).sum()
+    }
+
+    /// Samples a direction: `uc` chooses the lobe (and, within it, reflection
+    /// or refraction), `u` the direction. `None` when the sample carries no
+    /// light (below the surface, total absorption).
+    pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2) -> Option<BsdfSample> {
+        let total = self.total_weight();
+        if total <= 0.0 {
+            return None;
+        }
+        let flip = self.two_sided && wo.z < 0.0;
+        let wo_local = if flip { Vec3A::new(wo.x, wo.y, -wo.z) } else { wo };
+        // Choose a lobe and reuse what is left of `uc` inside it.
+        let mut acc = 0.0;
+        let mut chosen = self.count - 1;
+        let mut uc_rest = uc;
+        for (i, (_, w)) in self.lobes().iter().enumerate() {
+            let p = w / total;
+            if uc < acc + p || i == self.count - 1 {
+                chosen = i;
+                uc_rest = ((uc - acc) / p).clamp(0.0, 1.0 - f32::EPSILON);
+                break;
+            }
+            acc += p;
+        }
+        let (lobe, w) = self.lobes()[chosen];
+        let mut s = lobe.sample(wo_local, uc_rest, u, self.transport)?;
+        if s.delta {
+            s.pdf *= w / total;
+        } else if self.count > 1 {
+            // The mixture's value and density at the sampled direction.
+            s.f = self
+                .lobes()
+                .iter()
+                .fold(Vec3A::ZERO, |f, (l, _)| f + l.eval(wo_local, s.wi, self.transport));
+            s.pdf = self
+                .lobes()
+                .iter()
+                .map(|(l, lw)| lw / total * l.pdf(wo_local, s.wi))
+                .sum();
+        }
+        if flip {
+            s.wi.z = -s.wi.z;
+        }
+        (s.pdf > 0.0 && s.f.max_element() > 0.0).then_some(s)
+    }
+}

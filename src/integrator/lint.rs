@@ -1,9 +1,9 @@
-//! Warnings about material parameters that the Whitted integrator ignores,
-//! and about materials that reflect more light than they receive. Shown by
-//! `caustic info` and at the start of a render; they never stop a render.
+//! Warnings about parameters the scene's integrator ignores, and about
+//! materials that reflect more light than they receive. Shown by `caustic
+//! info` and at the start of a render; they never stop a render.
 
 use crate::math::Vec3A;
-use crate::scene::{Light, Material, Scene};
+use crate::scene::{IntegratorKind, Light, Material, Scene};
 
 /// One warning about one material.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,6 +18,29 @@ impl std::fmt::Display for MaterialWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "material `{}`: {}", self.material, self.message)
     }
+}
+
+/// Every warning about `scene`, as shown to the user.
+pub fn warnings(scene: &Scene) -> Vec<String> {
+    settings_warnings(scene)
+        .into_iter()
+        .chain(material_warnings(scene).iter().map(ToString::to_string))
+        .collect()
+}
+
+/// Warnings about the `[render]` settings.
+pub fn settings_warnings(scene: &Scene) -> Vec<String> {
+    let s = &scene.settings;
+    let mut out = Vec::new();
+    if s.integrator == IntegratorKind::Path {
+        if s.ambient.max_element() > 0.0 {
+            out.push("`[render] ambient` is ignored: the path integrator computes indirect light".into());
+        }
+        if s.medium.is_some() {
+            out.push("`[medium]` (exponential fog) is ignored: it is the Whitted integrator's model".into());
+        }
+    }
+    out
 }
 
 fn set(c: Vec3A) -> bool {
@@ -41,6 +64,7 @@ fn over_one(c: Vec3A) -> Option<String> {
 /// Warnings for every material used by an object of `scene`.
 pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
     let has_point_light = scene.lights.iter().any(|l| matches!(l, Light::Point { .. }));
+    let integrator = scene.settings.integrator;
     let mut used = vec![false; scene.materials.len()];
     for o in &scene.objects {
         used[o.material as usize] = true;
@@ -51,7 +75,7 @@ pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
         .zip(used)
         .filter(|(_, used)| *used)
         .flat_map(|(m, _)| {
-            warnings_of(m, has_point_light)
+            warnings_of(m, integrator, has_point_light)
                 .into_iter()
                 .map(|message| MaterialWarning {
                     material: m.name.clone(),
@@ -61,20 +85,45 @@ pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
         .collect()
 }
 
-fn warnings_of(m: &Material, has_point_light: bool) -> Vec<String> {
+fn warnings_of(m: &Material, integrator: IntegratorKind, has_point_light: bool) -> Vec<String> {
     let mut out = Vec::new();
-    if let Some(d) = m.dielectric {
+    let whitted = integrator == IntegratorKind::Whitted;
+    if m.conductor.is_some() || m.dielectric.is_some() {
+        let what = if m.conductor.is_some() {
+            "a conductor"
+        } else {
+            "a dielectric"
+        };
         if set(m.diffuse) {
-            out.push("`diffuse` is ignored: a dielectric has no diffuse term".into());
-        } else if set(m.ambient) {
-            out.push("`ambient` is ignored: a dielectric has no ambient term".into());
+            out.push(format!("`diffuse` is ignored: {what} has no diffuse term"));
+        } else if set(m.ambient) && whitted {
+            out.push(format!("`ambient` is ignored: {what} has no ambient term"));
         }
-        if set(m.specular) && !has_point_light {
+    }
+    if let Some(c) = m.conductor {
+        if set(m.specular) {
+            out.push("`specular` is ignored: a conductor's highlight comes from its index and roughness".into());
+        }
+        if c.roughness > 0.0 && whitted {
+            out.push("the Whitted integrator lights a rough conductor directly but shows no reflection in it".into());
+        }
+        return out;
+    }
+    if m.coating.is_some() && set(m.specular) {
+        out.push("`specular` is ignored: a coating's highlight comes from its index".into());
+    }
+    if let Some(d) = m.dielectric {
+        if set(m.specular) && !whitted {
+            out.push("`specular` is ignored: the path integrator's dielectric has no highlight lobe".into());
+        } else if set(m.specular) && !has_point_light {
             out.push(
                 "`specular` is ignored: a dielectric keeps the highlight of point lights only and the scene has \
                  none (area lights appear in its reflection)"
                     .into(),
             );
+        }
+        if d.roughness > 0.0 && whitted {
+            out.push("`roughness` is ignored: the Whitted integrator treats every dielectric as smooth".into());
         }
         if let Some(c) = over_one(d.tint) {
             out.push(format!("`dielectric.tint` transmits more light than it receives ({c})"));
@@ -124,14 +173,11 @@ mod tests {
     fn dead_and_energy_gaining_parameters_are_named() {
         let mut glass = Material::diffuse("glass", Vec3A::ZERO);
         glass.specular = Vec3A::splat(0.8);
-        glass.dielectric = Some(Dielectric {
-            ior: 1.5,
-            tint: Vec3A::ONE,
-        });
-        let w = warnings_of(&glass, false);
+        glass.dielectric = Some(Dielectric::smooth(1.5, Vec3A::ONE));
+        let w = warnings_of(&glass, IntegratorKind::Whitted, false);
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(w[0].contains("point lights only"));
-        assert!(warnings_of(&glass, true).is_empty());
+        assert!(warnings_of(&glass, IntegratorKind::Whitted, true).is_empty());
 
         let mut mirror = Material::diffuse("mirror", Vec3A::ZERO);
         mirror.specular = Vec3A::splat(0.6);
@@ -139,7 +185,7 @@ mod tests {
             reflectivity: 1.0,
             tint: Vec3A::ONE,
         });
-        let w = warnings_of(&mirror, true);
+        let w = warnings_of(&mirror, IntegratorKind::Whitted, true);
         assert_eq!(
             w,
             vec!["`specular` is ignored: a perfect mirror (reflectivity 1) shows only its reflection"]
@@ -147,10 +193,10 @@ mod tests {
 
         let mut bright = Material::diffuse("bright", Vec3A::new(0.8, 0.5, 0.5));
         bright.specular = Vec3A::new(0.4, 0.4, 0.4);
-        let w = warnings_of(&bright, true);
+        let w = warnings_of(&bright, IntegratorKind::Whitted, true);
         assert_eq!(w.len(), 1);
         assert!(w[0].contains("1.200 in red"), "{w:?}");
 
-        assert!(warnings_of(&Material::diffuse("ok", Vec3A::splat(0.9)), true).is_empty());
+        assert!(warnings_of(&Material::diffuse("ok", Vec3A::splat(0.9)), IntegratorKind::Path, true).is_empty());
     }
 }

@@ -1,10 +1,12 @@
 //! Integrators: the render plan, the photon pass (caustics), fog, the
-//! Whitted integrator, the progressive deterministic render loop and the
+//! Whitted integrator, the path tracer and its light sampling, the progressive deterministic render loop and the
 //! debug overlays.
 
 pub mod debug;
 pub mod fog;
+pub mod lights;
 pub mod lint;
+pub mod path;
 pub mod photon;
 pub mod plan;
 pub mod render;

@@ -8,8 +8,11 @@
 //! Each pass has its own "ran / skipped because ..." line in the `Display`
 //! output.
 
-use crate::scene::{Light, SampleSharing, Scene};
+use crate::scene::{IntegratorKind, Light, SampleSharing, Scene};
 use std::fmt;
+
+/// Bounces before the path integrator's Russian roulette may end a path.
+pub const ROULETTE_DEPTH: u32 = 3;
 
 /// How the shadow rays of one light are cast.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,6 +30,9 @@ pub enum ShadowSampling {
         /// Most shadow rays one camera sample casts toward this light.
         rays_per_sample: u32,
     },
+    /// Constant environment: Whitted shows it in rays that leave the scene;
+    /// path tracing also samples it.
+    Environment,
 }
 
 /// The plan for one light.
@@ -48,6 +54,8 @@ pub enum Sharing {
     SplitRequested,
     /// Split because there is only one sample per pixel.
     SplitSingleSample,
+    /// The path integrator draws every sample independently.
+    Independent,
 }
 
 /// Secondary (reflected / refracted) rays.
@@ -93,6 +101,8 @@ pub enum PhotonPlan {
     DepthZero,
     /// `[photons] count = 0`.
     CountZero,
+    /// The path integrator finds caustics by path tracing.
+    PathTraced,
 }
 
 /// Exponential fog.
@@ -105,6 +115,8 @@ pub enum FogPlan {
     },
     /// The scene has no `[medium]`.
     NoMedium,
+    /// The exponential fog is the Whitted integrator's model only.
+    PathTraced,
 }
 
 /// What a render will do, computed from the scene by [`RenderPlan::new`].
@@ -116,8 +128,11 @@ pub struct RenderPlan {
     pub height: u32,
     /// Camera samples per pixel.
     pub spp: u32,
-    /// Specular bounce limit.
+    /// Bounce limit (Whitted: specular bounces; path: every bounce,
+    /// `u32::MAX` for none).
     pub max_depth: u32,
+    /// The light transport algorithm.
+    pub integrator: IntegratorKind,
     /// Seed of the random streams.
     pub seed: u64,
     /// Ambient term active (scene ambient light is not black).
@@ -142,7 +157,9 @@ impl RenderPlan {
     pub fn new(scene: &Scene) -> RenderPlan {
         let s = &scene.settings;
         let spp = s.spp.max(1);
-        let sharing = if spp == 1 {
+        let sharing = if s.integrator == IntegratorKind::Path {
+            Sharing::Independent
+        } else if spp == 1 {
             Sharing::SplitSingleSample
         } else if s.sharing == SampleSharing::Split {
             Sharing::SplitRequested
@@ -157,6 +174,7 @@ impl RenderPlan {
             .map(|(index, light)| {
                 let shadow = match light {
                     Light::Point { .. } => ShadowSampling::Hard,
+                    Light::Environment { .. } => ShadowSampling::Environment,
                     Light::Area(a) => {
                         let n = a.samples.max(1);
                         // Spreading needs at least one stratum per sample:
@@ -185,9 +203,15 @@ impl RenderPlan {
                 dielectric_objects += 1;
             }
         }
+        let path = s.integrator == IntegratorKind::Path;
+        let max_depth = if path {
+            s.max_depth.unwrap_or(u32::MAX)
+        } else {
+            s.whitted_depth()
+        };
         let secondary = if specular_objects == 0 {
             Secondary::NoSpecularObject
-        } else if s.max_depth == 0 {
+        } else if max_depth == 0 {
             Secondary::DepthZero
         } else {
             Secondary::Traced {
@@ -196,11 +220,13 @@ impl RenderPlan {
             }
         };
         let ps = &s.photons;
-        let photons = if specular_objects == 0 {
+        let photons = if path {
+            PhotonPlan::PathTraced
+        } else if specular_objects == 0 {
             PhotonPlan::NoSpecularCaster
-        } else if scene.lights.is_empty() {
+        } else if !scene.lights.iter().any(Light::emits_photons) {
             PhotonPlan::NoLights
-        } else if s.max_depth == 0 {
+        } else if max_depth == 0 {
             PhotonPlan::DepthZero
         } else if ps.count == 0 {
             PhotonPlan::CountZero
@@ -215,6 +241,7 @@ impl RenderPlan {
             }
         };
         let fog = match &s.medium {
+            Some(_) if path => FogPlan::PathTraced,
             Some(m) => FogPlan::Run { density: m.density },
             None => FogPlan::NoMedium,
         };
@@ -222,9 +249,10 @@ impl RenderPlan {
             width: s.width,
             height: s.height,
             spp,
-            max_depth: s.max_depth,
+            max_depth,
+            integrator: s.integrator,
             seed: s.seed,
-            ambient: s.ambient.max_element() > 0.0,
+            ambient: !path && s.ambient.max_element() > 0.0,
             lights,
             secondary,
             sharing,
@@ -321,16 +349,51 @@ impl RenderPlan {
                 self.seed
             ),
         )];
-        stages.push(if self.ambient {
-            Stage::ran("ambient term", String::new())
+        if self.integrator == IntegratorKind::Path {
+            let depth = if self.max_depth == u32::MAX {
+                "no depth limit".to_string()
+            } else {
+                format!("at most {} bounces", self.max_depth)
+            };
+            stages.push(Stage::ran(
+                "path tracing",
+                format!(
+                    "next-event estimation with multiple importance sampling (power heuristic), \
+                     Russian roulette after {} bounces, {depth}",
+                    ROULETTE_DEPTH
+                ),
+            ));
+            stages.push(Stage::skipped(
+                "ambient term",
+                "the path integrator computes indirect light",
+            ));
         } else {
-            Stage::skipped("ambient term", "scene ambient light is black")
-        });
+            stages.push(if self.ambient {
+                Stage::ran("ambient term", String::new())
+            } else {
+                Stage::skipped("ambient term", "scene ambient light is black")
+            });
+        }
         if self.lights.is_empty() {
             stages.push(Stage::skipped("direct light and shadow rays", "no lights"));
         }
         for l in &self.lights {
+            if self.integrator == IntegratorKind::Path {
+                let (kind, how) = match l.shadow {
+                    ShadowSampling::Hard => ("point", "sampled by next-event estimation"),
+                    ShadowSampling::Stratified { .. } => {
+                        ("area", "sampled by next-event estimation and hit by paths (MIS)")
+                    }
+                    ShadowSampling::Environment => ("environment", "sampled uniformly and hit by escaping paths (MIS)"),
+                };
+                stages.push(Stage::ran(format!("light {} ({kind})", l.index), how.into()));
+                continue;
+            }
             stages.push(match l.shadow {
+                ShadowSampling::Environment => Stage::ran(
+                    format!("light {} (environment)", l.index),
+                    "seen by rays that leave the scene".into(),
+                ),
                 ShadowSampling::Hard => Stage::ran(
                     format!("light {} (point)", l.index),
                     "hard shadow, 1 shadow ray per shading point".into(),
@@ -356,20 +419,23 @@ impl RenderPlan {
                 ),
             });
         }
-        stages.push(match self.secondary {
-            Secondary::Traced {
-                specular_objects,
-                dielectric_objects,
-            } => Stage::ran(
-                "secondary rays",
-                format!(
-                    "{specular_objects} mirror/glass object(s) ({dielectric_objects} refracting), depth limit {}",
-                    self.max_depth
+        // Path tracing's bounces are part of its own stage.
+        if self.integrator == IntegratorKind::Whitted {
+            stages.push(match self.secondary {
+                Secondary::Traced {
+                    specular_objects,
+                    dielectric_objects,
+                } => Stage::ran(
+                    "secondary rays",
+                    format!(
+                        "{specular_objects} mirror/glass object(s) ({dielectric_objects} refracting), depth limit {}",
+                        self.max_depth
+                    ),
                 ),
-            ),
-            Secondary::NoSpecularObject => Stage::skipped("secondary rays", "no mirror or dielectric object"),
-            Secondary::DepthZero => Stage::skipped("secondary rays", "max depth is 0"),
-        });
+                Secondary::NoSpecularObject => Stage::skipped("secondary rays", "no mirror or dielectric object"),
+                Secondary::DepthZero => Stage::skipped("secondary rays", "max depth is 0"),
+            });
+        }
         stages.push(match self.photons {
             PhotonPlan::Run {
                 count,
@@ -389,12 +455,14 @@ impl RenderPlan {
             PhotonPlan::NoLights => Stage::skipped("photon pass", "no lights"),
             PhotonPlan::DepthZero => Stage::skipped("photon pass", "max depth is 0"),
             PhotonPlan::CountZero => Stage::skipped("photon pass", "photon count is 0"),
+            PhotonPlan::PathTraced => Stage::skipped("photon pass", "the path integrator traces caustics as paths"),
         });
         stages.push(match self.fog {
             FogPlan::Run { density } => {
                 Stage::ran("fog", format!("density {density} per unit length inside the water"))
             }
             FogPlan::NoMedium => Stage::skipped("fog", "no medium"),
+            FogPlan::PathTraced => Stage::skipped("fog", "the exponential fog is the Whitted integrator's"),
         });
         stages.push(match self.sharing {
             Sharing::Spread => Stage::ran(
@@ -408,6 +476,7 @@ impl RenderPlan {
                 "sharing = split: every sample casts all shadow rays and follows both branches",
             ),
             Sharing::SplitSingleSample => Stage::skipped("sample spreading", "1 sample per pixel: full splitting"),
+            Sharing::Independent => Stage::skipped("sample spreading", "the path integrator samples independently"),
         });
         stages
     }
@@ -547,7 +616,7 @@ mod tests {
             .to_string()
             .contains("photon pass: ran, 1000000 photons, emission restricted to 1 specular caster(s)"));
         let mut s = scene(4, SampleSharing::Spread, true);
-        s.settings.max_depth = 0;
+        s.settings.max_depth = Some(0);
         let flat = RenderPlan::new(&s);
         assert_eq!(flat.secondary, Secondary::DepthZero);
         assert_eq!(flat.photons, PhotonPlan::DepthZero);

@@ -13,6 +13,7 @@
 //! number of threads. A render can be stopped (cancel flag, sample limit) at
 //! any pixel boundary; pixels never hold part of a sample.
 
+use super::path::PathTracer;
 use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
@@ -21,7 +22,7 @@ use crate::film::{Accumulation, Film};
 use crate::math::rng::Domain;
 use crate::math::sampling::{grid_for, stratified};
 use crate::math::{Rng, Vec2, Vec3, Vec3A};
-use crate::scene::Scene;
+use crate::scene::{IntegratorKind, Scene};
 use rayon::prelude::*;
 use std::fmt;
 use std::num::NonZero;
@@ -325,10 +326,16 @@ pub fn render_progressive(
     let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
     let total = width as u64 * height as u64 * spp as u64;
 
-    let mut integrator = Whitted::new(scene, accel, plan);
-    if let Some(map) = photons {
-        integrator = integrator.with_photons(map);
-    }
+    let integrator = match plan.integrator {
+        IntegratorKind::Whitted => {
+            let mut w = Whitted::new(scene, accel, plan);
+            if let Some(map) = photons {
+                w = w.with_photons(map);
+            }
+            Tracer::Whitted(w)
+        }
+        IntegratorKind::Path => Tracer::Path(PathTracer::new(scene, accel, plan)),
+    };
     let mut level = start.taken_range().0;
     let done = AtomicU64::new(start.samples_taken());
     let states = split_into_tiles(&start);
@@ -444,9 +451,15 @@ fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulatio
 /// Brings every pixel of the tile to `target` samples (pixels already there
 /// are left alone), in increasing sample index. Stops before the next pixel
 /// once `cancel` is set.
+/// The integrator a render uses.
+enum Tracer<'a> {
+    Whitted(Whitted<'a>),
+    Path(PathTracer<'a>),
+}
+
 fn render_tile_pass(
     scene: &Scene,
-    integrator: &Whitted,
+    integrator: &Tracer,
     plan: &RenderPlan,
     state: &mut TileState,
     target: u32,
@@ -482,14 +495,19 @@ fn render_tile_pass(
                 let sub = stratified(k, gx, gy, Vec2::new(jx, jy));
                 let ray = camera.ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 out.rays.camera += 1;
-                let mut ctx = SampleContext {
-                    rng,
-                    slot: strata.slot(k),
-                    fresnel_stratum: strata.fresnel_stratum(k),
-                    counts: &mut out.rays,
-                    sites: &mut sites,
+                let l = match integrator {
+                    Tracer::Whitted(whitted) => {
+                        let mut ctx = SampleContext {
+                            rng,
+                            slot: strata.slot(k),
+                            fresnel_stratum: strata.fresnel_stratum(k),
+                            counts: &mut out.rays,
+                            sites: &mut sites,
+                        };
+                        whitted.radiance(&ray, 0, &mut ctx)
+                    }
+                    Tracer::Path(path) => path.radiance(&ray, &mut rng, &mut out.rays),
                 };
-                let l = integrator.radiance(&ray, 0, &mut ctx);
                 out.samples += 1;
                 if l.is_finite() {
                     sum += l.min(Vec3A::splat(SAMPLE_RADIANCE_LIMIT));

@@ -7,11 +7,12 @@
 //! an area light of radiance `L` and area `A`, sampled at N stratified points
 //! `x_k`, gives `E ≈ (1/N) Σ_k L cos θ_k cos θ'_k A / r_k²` (visibility
 //! included). Outgoing radiance is `f(ωi, ωo) · E` summed over lights, with
-//! the energy-normalised BRDF
-//! `f = kd/π + ks · (n+2)/(2π) · (R·V)^n` (Phong; Lafortune & Willems 1994)
-//! or `f = kd/π + ks · (n+8)/(8π) · (N·H)^n` (Blinn-Phong; the normalisation
-//! of Akenine-Möller et al., *Real-Time Rendering*, §7.7), so a white lobe
-//! reflects at most (about) the incident energy whatever the exponent.
+//! the energy-normalised BRDF of `bsdf::phong`, shared with the path
+//! integrator: `f = kd/π + ks · (n+2)/(2π) · (R·V)^n` (Phong; Lafortune &
+//! Willems 1994) or Blinn-Phong as a microfacet lobe, the normalised
+//! distribution `(n+2)/(2π) (N·H)^n` with V-cavity masking (Cook & Torrance
+//! 1982), so a white lobe never reflects more than the incident energy,
+//! whatever the exponent or angle.
 //!
 //! Spawned rays start at `offset_ray_origin` (error-bound offsets, no fixed
 //! epsilon); shadow rays stop a relative `SHADOW_EPSILON` short of the light.
@@ -38,10 +39,11 @@ use super::fog;
 use super::photon::{GatherParams, PhotonMap, SiteCache};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
+use crate::bsdf::phong;
 use crate::bsdf::specular::{fresnel_schlick, reflect, DielectricInterface};
 use crate::math::sampling::stratified;
-use crate::math::{offset_ray_origin, Ray, Rng, Vec2, Vec3A};
-use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, ShadingModel, SurfaceInteraction};
+use crate::math::{offset_ray_origin, Frame, Ray, Rng, Vec2, Vec3A};
+use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
 use std::ops::AddAssign;
 
@@ -108,6 +110,8 @@ pub struct Whitted<'a> {
     caustics: Option<(&'a PhotonMap, GatherParams)>,
     /// The fog, when the plan runs it.
     medium: Option<&'a Medium>,
+    /// Radiance of the environment lights, seen by rays that leave the scene.
+    environment: Vec3A,
 }
 
 impl<'a> Whitted<'a> {
@@ -118,18 +122,23 @@ impl<'a> Whitted<'a> {
             .iter()
             .filter_map(|l| match l {
                 Light::Area(a) => Quad::new(a.center - (a.u + a.v) * 0.5, a.u, a.v).map(|q| (q, a.radiance)),
-                Light::Point { .. } => None,
+                Light::Point { .. } | Light::Environment { .. } => None,
             })
             .collect();
+        let environment = scene.lights.iter().fold(Vec3A::ZERO, |sum, l| match l {
+            Light::Environment { radiance } => sum + *radiance,
+            _ => sum,
+        });
         let medium = match plan.fog {
             FogPlan::Run { .. } => scene.settings.medium.as_ref(),
-            FogPlan::NoMedium => None,
+            FogPlan::NoMedium | FogPlan::PathTraced => None,
         };
         Self {
             scene,
             accel,
             plan,
             emitters,
+            environment,
             caustics: None,
             medium,
         }
@@ -174,7 +183,7 @@ impl<'a> Whitted<'a> {
         let l = match (emitted, hit) {
             (Some(l), _) => l,
             (None, Some(hit)) => self.shade(ray, &hit, depth, ctx),
-            (None, None) => Vec3A::ZERO,
+            (None, None) => self.environment,
         };
         match self.medium {
             Some(m) => fog::apply(m, ray, t_nearest, l),
@@ -267,6 +276,9 @@ impl<'a> Whitted<'a> {
                     out += f * *intensity * (cos / d2);
                 }
                 (Light::Area(_), _) if highlights_only => {}
+                // Seen in rays that leave the scene only (the ambient term
+                // stands for diffuse light in this model).
+                (Light::Environment { .. }, _) | (_, ShadowSampling::Environment) => {}
                 (
                     Light::Area(a),
                     ShadowSampling::Stratified {
@@ -392,35 +404,25 @@ fn facing(si: &SurfaceInteraction, wo: Vec3A) -> (Vec3A, Vec3A) {
     }
 }
 
-/// The normalised specular lobe (without the diffuse part), see the module docs.
+/// The highlight of `m` alone, for world directions about the shading
+/// normal `ns` (the lobes are `bsdf::phong`'s, written once).
 #[inline]
 fn specular_lobe(m: &Material, ns: Vec3A, wi: Vec3A, wo: Vec3A) -> Vec3A {
-    if m.specular.max_element() <= 0.0 {
-        return Vec3A::ZERO;
-    }
-    let n = m.shininess.max(0.0);
-    let lobe = match m.model {
-        ShadingModel::Phong => {
-            let r = reflect(-wi, ns);
-            (n + 2.0) / (2.0 * PI) * r.dot(wo).max(0.0).powf(n)
-        }
-        ShadingModel::BlinnPhong => {
-            let h = (wi + wo).normalize_or_zero();
-            (n + 8.0) / (8.0 * PI) * ns.dot(h).max(0.0).powf(n)
-        }
-    };
-    m.specular * lobe
+    let frame = Frame::from_normal(ns);
+    phong::highlight(m, frame.to_local(wo), frame.to_local(wi))
 }
 
-/// Lambert + normalised Phong / Blinn-Phong BRDF.
+/// Lambert + normalised Phong / Blinn-Phong BRDF of `m` (`bsdf::phong`).
 #[inline]
 fn brdf(m: &Material, ns: Vec3A, wi: Vec3A, wo: Vec3A) -> Vec3A {
-    m.diffuse * (1.0 / PI) + specular_lobe(m, ns, wi, wo)
+    let frame = Frame::from_normal(ns);
+    phong::surface(m, frame.to_local(wo), frame.to_local(wi))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::ShadingModel;
 
     #[test]
     fn lobes_are_energy_normalised() {

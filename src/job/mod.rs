@@ -19,9 +19,9 @@ pub use interrupt::Interrupt;
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, AccelStats};
 use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, OutputError};
 use crate::geometry::TriangleTest;
-use crate::integrator::lint::{self, MaterialWarning};
+use crate::integrator::lint;
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
-use crate::scene::{self, Scene, SceneError};
+use crate::scene::{self, IntegratorKind, Scene, SceneError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -43,6 +43,8 @@ pub struct Overrides {
     pub photons: Option<u64>,
     /// Ray–triangle test of the in-house accelerators.
     pub triangle_test: Option<TriangleTest>,
+    /// Light transport algorithm.
+    pub integrator: Option<IntegratorKind>,
 }
 
 impl Overrides {
@@ -61,6 +63,9 @@ impl Overrides {
         }
         if let Some(t) = self.triangle_test {
             s.triangle_test = t;
+        }
+        if let Some(i) = self.integrator {
+            s.integrator = i;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
             .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))
@@ -199,7 +204,7 @@ pub struct JobStart<'a> {
     pub total_samples: u64,
     /// Material parameters the integrator ignores, and materials that
     /// reflect more than they receive.
-    pub warnings: &'a [MaterialWarning],
+    pub warnings: &'a [String],
 }
 
 /// How a caller follows and stops a running job.
@@ -366,7 +371,7 @@ impl RenderJob {
         let plan = self.plan();
         let st = &self.scene.settings;
         let total_samples = st.width as u64 * st.height as u64 * st.spp as u64;
-        let warnings = lint::material_warnings(&self.scene);
+        let warnings = lint::warnings(&self.scene);
         (hooks.started)(&JobStart {
             accel: &stats,
             plan: &plan,

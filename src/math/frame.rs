@@ -23,6 +23,12 @@ impl Frame {
         Self { s, t, n }
     }
 
+    /// World coordinates to local (`n` becomes +z).
+    #[inline]
+    pub fn to_local(&self, v: Vec3A) -> Vec3A {
+        Vec3A::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
     /// Local coordinates to world.
     #[inline]
     pub fn to_world(&self, v: Vec3A) -> Vec3A {

@@ -55,6 +55,13 @@ impl Rng {
         (self.f32(), self.f32())
     }
 
+    /// A uniform point of [0, 1)².
+    #[inline]
+    pub fn vec2(&mut self) -> glam::Vec2 {
+        let (a, b) = self.f32x2();
+        glam::Vec2::new(a, b)
+    }
+
     /// Uniform u32.
     #[inline]
     pub fn u32(&mut self) -> u32 {

@@ -144,6 +144,8 @@ pub enum LightKind {
     Point,
     /// `"area"`.
     Area,
+    /// `"environment"`: constant radiance from every direction.
+    Environment,
 }
 
 /// Object type names.
@@ -184,6 +186,18 @@ pub struct RenderDesc {
     pub triangle_test: Option<TriangleTestName>,
     /// Sample sharing between a pixel's samples.
     pub sharing: Option<SharingName>,
+    /// Light transport algorithm.
+    pub integrator: Option<IntegratorName>,
+}
+
+/// Integrator names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegratorName {
+    /// `"whitted"`.
+    Whitted,
+    /// `"path"`.
+    Path,
 }
 
 /// `[camera]`.
@@ -218,6 +232,10 @@ pub struct MaterialDesc {
     pub mirror: Option<Spanned<MirrorDesc>>,
     /// `[materials.NAME.dielectric]`.
     pub dielectric: Option<Spanned<DielectricDesc>>,
+    /// `[materials.NAME.conductor]`.
+    pub conductor: Option<Spanned<ConductorDesc>>,
+    /// `[materials.NAME.coating]`.
+    pub coating: Option<Spanned<CoatingDesc>>,
 }
 
 /// `[materials.NAME.mirror]`.
@@ -238,6 +256,42 @@ pub struct DielectricDesc {
     pub ior: Option<Spanned<f64>>,
     /// Colour filter on transmitted light.
     pub tint: Option<Spanned<Vec3Desc>>,
+    /// GGX roughness (0: smooth).
+    pub roughness: Option<Spanned<f64>>,
+    /// Fresnel formula.
+    pub fresnel: Option<FresnelName>,
+}
+
+/// Fresnel formula names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FresnelName {
+    /// `"exact"`.
+    Exact,
+    /// `"schlick"`.
+    Schlick,
+}
+
+/// `[materials.NAME.conductor]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConductorDesc {
+    /// A named metal (`gold`, `silver`, `copper`, `aluminium`).
+    pub metal: Option<Spanned<String>>,
+    /// Real part of the index, per channel.
+    pub eta: Option<Spanned<Vec3Desc>>,
+    /// Extinction coefficient, per channel.
+    pub k: Option<Spanned<Vec3Desc>>,
+    /// GGX roughness (0: smooth).
+    pub roughness: Option<Spanned<f64>>,
+}
+
+/// `[materials.NAME.coating]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoatingDesc {
+    /// Index of refraction of the coating.
+    pub ior: Option<Spanned<f64>>,
 }
 
 /// `[[lights]]`: the keys of every light type (the loader checks which
@@ -249,7 +303,7 @@ pub struct LightDesc {
     #[serde(rename = "type")]
     pub kind: Spanned<LightKind>,
     /// Position (point) or centre of the rectangle (area).
-    pub position: Spanned<Vec3Desc>,
+    pub position: Option<Spanned<Vec3Desc>>,
     /// Colour (`color` is accepted too).
     #[serde(alias = "color")]
     pub colour: Option<Spanned<Vec3Desc>>,

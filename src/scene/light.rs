@@ -16,6 +16,11 @@ pub enum Light {
     /// One-sided rectangle emitting radiance `radiance` from the side of
     /// `normal = normalize(u × v)`.
     Area(AreaLight),
+    /// Constant radiance arriving from every direction, infinitely far.
+    Environment {
+        /// Colour × intensity (W/m²/sr per channel).
+        radiance: Vec3A,
+    },
 }
 
 /// Rectangular area light centred on `center` with edges `u` and `v`.
@@ -67,11 +72,20 @@ impl AreaLight {
 }
 
 impl Light {
-    /// Total emitted power (W per channel).
+    /// Total emitted power (W per channel) of a point or area light. An
+    /// environment's power depends on the scene it surrounds: 0 here (see
+    /// `integrator::lights` for the power used to sample it).
     pub fn power(&self) -> Vec3A {
         match self {
             Light::Point { intensity, .. } => *intensity * (4.0 * std::f32::consts::PI),
             Light::Area(a) => a.power(),
+            Light::Environment { .. } => Vec3A::ZERO,
         }
+    }
+
+    /// The photon pass emits from this light (point and area lights; an
+    /// environment lights the scene without photons).
+    pub fn emits_photons(&self) -> bool {
+        !matches!(self, Light::Environment { .. })
     }
 }

@@ -21,13 +21,60 @@ pub struct Mirror {
     pub tint: Vec3A,
 }
 
-/// Smooth dielectric interface: Fresnel-Schlick mix of reflection and refraction.
+/// Which Fresnel formula a dielectric uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FresnelModel {
+    /// The exact unpolarised reflectance.
+    Exact,
+    /// Schlick's approximation (the original report's).
+    Schlick,
+}
+
+/// Dielectric interface (glass, water): Fresnel-weighted reflection and
+/// refraction, smooth or rough.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dielectric {
     /// Index of refraction of the inside (the outside is 1).
     pub ior: f32,
     /// Colour filter on transmitted light.
     pub tint: Vec3A,
+    /// GGX roughness `alpha` (0: smooth). The Whitted integrator treats
+    /// every dielectric as smooth.
+    pub roughness: f32,
+    /// Fresnel formula; `None`: each integrator's own (Whitted: Schlick,
+    /// as in the original report; path: exact).
+    pub fresnel: Option<FresnelModel>,
+}
+
+impl Dielectric {
+    /// A smooth dielectric of index `ior` with a colour filter.
+    pub fn smooth(ior: f32, tint: Vec3A) -> Self {
+        Self {
+            ior,
+            tint,
+            roughness: 0.0,
+            fresnel: None,
+        }
+    }
+}
+
+/// A metal: complex index of refraction `eta + i k` per channel, smooth or
+/// rough.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conductor {
+    /// Real part of the index.
+    pub eta: Vec3A,
+    /// Extinction coefficient.
+    pub k: Vec3A,
+    /// GGX roughness `alpha` (0: a perfect mirror).
+    pub roughness: f32,
+}
+
+/// A smooth clear coating over the diffuse albedo (plastic, varnish).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coating {
+    /// Index of refraction of the coating.
+    pub ior: f32,
 }
 
 /// A named material.
@@ -49,6 +96,10 @@ pub struct Material {
     pub mirror: Option<Mirror>,
     /// Optional dielectric: the surface then reflects and refracts.
     pub dielectric: Option<Dielectric>,
+    /// Optional metal: the surface is then a (rough) conductor.
+    pub conductor: Option<Conductor>,
+    /// Optional clear coating over the diffuse albedo.
+    pub coating: Option<Coating>,
 }
 
 impl Material {
@@ -63,19 +114,24 @@ impl Material {
             shininess: 1.0,
             mirror: None,
             dielectric: None,
+            conductor: None,
+            coating: None,
         }
     }
 
     /// True when rays continue through this surface (mirror or dielectric):
     /// such objects cast caustics and need secondary rays.
     pub fn is_specular(&self) -> bool {
-        self.dielectric.is_some() || self.mirror.is_some_and(|m| m.reflectivity > 0.0)
+        self.dielectric.is_some()
+            || self.mirror.is_some_and(|m| m.reflectivity > 0.0)
+            || self.conductor.is_some_and(|c| c.roughness == 0.0)
     }
 
     /// True when the surface has a diffuse part that receives direct light
     /// and photons.
     pub fn is_diffuse(&self) -> bool {
         self.dielectric.is_none()
+            && self.conductor.is_none()
             && self.diffuse.max_element() > 0.0
             && self.mirror.is_none_or(|m| m.reflectivity < 1.0)
     }

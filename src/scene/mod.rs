@@ -8,6 +8,7 @@ pub mod light;
 pub mod load;
 pub mod material;
 pub mod medium;
+pub mod metals;
 
 pub use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::{Hit, TriangleTest};
@@ -19,7 +20,7 @@ pub use crate::geometry::{WaterSurface, Wave};
 pub use camera::Camera;
 pub use light::{AreaLight, Light};
 pub use load::{load_scene, parse_scene, SceneError};
-pub use material::{Dielectric, Material, Mirror, ShadingModel};
+pub use material::{Coating, Conductor, Dielectric, FresnelModel, Material, Mirror, ShadingModel};
 pub use medium::Medium;
 
 /// How secondary work is shared between a pixel's samples.
@@ -32,6 +33,38 @@ pub enum SampleSharing {
     Split,
 }
 
+/// Specular bounces the Whitted integrator follows when the scene sets no
+/// `max_depth`.
+pub const DEFAULT_WHITTED_DEPTH: u32 = 8;
+
+/// The light transport algorithm (`[render] integrator`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// The original report's model: direct light, mirrors and glass,
+    /// photon-mapped caustics, an ambient term.
+    #[default]
+    Whitted,
+    /// Physically based path tracing with next-event estimation and MIS.
+    Path,
+}
+
+impl IntegratorKind {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Whitted => "whitted",
+            IntegratorKind::Path => "path",
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Specular bounces the Whitted integrator follows.
+    pub fn whitted_depth(&self) -> u32 {
+        self.max_depth.unwrap_or(DEFAULT_WHITTED_DEPTH)
+    }
+}
+
 /// Render settings (the `[render]` table).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -41,8 +74,12 @@ pub struct RenderSettings {
     pub height: u32,
     /// Samples per pixel.
     pub spp: u32,
-    /// Maximum number of specular bounces.
-    pub max_depth: u32,
+    /// Maximum number of bounces; `None`: the integrator's default
+    /// ([`DEFAULT_WHITTED_DEPTH`] specular bounces for Whitted, unbounded with
+    /// Russian roulette for path tracing).
+    pub max_depth: Option<u32>,
+    /// Light transport algorithm.
+    pub integrator: IntegratorKind,
     /// Seed of every random stream.
     pub seed: u64,
     /// Tone mapping and exposure of the 8-bit output.
@@ -107,7 +144,8 @@ impl Default for RenderSettings {
             width: 640,
             height: 480,
             spp: 1,
-            max_depth: 8,
+            max_depth: None,
+            integrator: IntegratorKind::Whitted,
             seed: 0,
             output: OutputSettings::default(),
             ambient: Vec3A::ZERO,

@@ -52,7 +52,7 @@ pub const DEPTH_LIMIT: u32 = 100;
 
 fn glass(ior: f32) -> Material {
     Material {
-        dielectric: Some(Dielectric { ior, tint: Vec3A::ONE }),
+        dielectric: Some(Dielectric::smooth(ior, Vec3A::ONE)),
         ..Material::diffuse("glass", Vec3A::ZERO)
     }
 }
@@ -193,7 +193,7 @@ fn chain_rows(options: &StressOptions) -> Vec<StressRow> {
     }
     let case = format!("7 Whitted depth limit (max_depth {DEPTH_LIMIT})");
     let mut scene = trap_scene(false);
-    scene.settings.max_depth = DEPTH_LIMIT;
+    scene.settings.max_depth = Some(DEPTH_LIMIT);
     scene.lights.push(Light::Point {
         position: Vec3A::new(0.0, 5.0, 3.0),
         intensity: Vec3A::splat(10.0),
@@ -236,7 +236,7 @@ pub fn glass_scene(width: u32) -> Result<Scene, String> {
     let s = &mut scene.settings;
     s.width = width.max(8);
     s.height = (width * 3 / 4).max(6);
-    s.max_depth = 64;
+    s.max_depth = Some(64);
     // One branch per dielectric hit (spread sampling): with the scene's
     // split sampling every hit spawns both branches, 2^64 rays at this depth.
     s.sharing = crate::scene::SampleSharing::Spread;

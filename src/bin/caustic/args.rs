@@ -2,7 +2,7 @@
 //! the groups they share.
 
 use caustic::accel::{AccelKind, AccelOptions, TriangleTest};
-use caustic::scene::Scene;
+use caustic::scene::{IntegratorKind, Scene};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
@@ -19,6 +19,24 @@ impl From<AccelArg> for AccelKind {
             AccelArg::Embree => AccelKind::Embree,
             AccelArg::Kdtree => AccelKind::KdTree,
             AccelArg::Brute => AccelKind::Brute,
+        }
+    }
+}
+
+/// The light transport algorithm.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum IntegratorArg {
+    /// The original report's Whitted ray tracing with photon-mapped caustics.
+    Whitted,
+    /// Physically based path tracing (next-event estimation, MIS).
+    Path,
+}
+
+impl From<IntegratorArg> for IntegratorKind {
+    fn from(a: IntegratorArg) -> Self {
+        match a {
+            IntegratorArg::Whitted => IntegratorKind::Whitted,
+            IntegratorArg::Path => IntegratorKind::Path,
         }
     }
 }
@@ -119,6 +137,9 @@ pub struct RenderArgs {
     /// EXR output (linear HDR).
     #[arg(long)]
     pub exr: Option<PathBuf>,
+    /// Light transport algorithm (default: the scene's `[render] integrator`, else whitted).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
     /// Override the image width.
     #[arg(long)]
     pub width: Option<u32>,
@@ -175,6 +196,9 @@ pub enum DebugView {
 pub struct InfoArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
+    /// Light transport algorithm shown in the plan (default: the scene's).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
     #[command(flatten)]
     pub accel: AccelArgs,
 }

@@ -8,20 +8,29 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film;
 use caustic::integrator::RenderPlan;
 use caustic::job::Overrides;
-use caustic::scene;
+use caustic::scene::{self, IntegratorKind};
 use std::time::Instant;
 
 pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
     let mut scene = load(&args.scene)?;
     args.accel.apply(&mut scene);
+    if let Some(i) = args.integrator {
+        scene.settings.integrator = i.into();
+    }
     let st = &scene.settings;
     let distinct: u64 = scene.meshes.iter().map(|m| m.triangles.len() as u64).sum();
     let b = scene.bounds();
     println!("scene       {}", args.scene.display());
+    let depth = match (st.max_depth, st.integrator) {
+        (Some(d), _) => d.to_string(),
+        (None, IntegratorKind::Whitted) => st.whitted_depth().to_string(),
+        (None, IntegratorKind::Path) => "unbounded (Russian roulette)".to_string(),
+    };
     println!(
-        "image       {}×{}, {} spp, max depth {}, seed {}",
-        st.width, st.height, st.spp, st.max_depth, st.seed
+        "image       {}×{}, {} spp, max depth {depth}, seed {}",
+        st.width, st.height, st.spp, st.seed
     );
+    println!("integrator  {}", st.integrator.name());
     println!(
         "objects     {} ({} mesh instances)",
         scene.objects.len(),
@@ -63,7 +72,7 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         );
     }
     println!("{}", RenderPlan::new(&scene));
-    for w in caustic::integrator::lint::material_warnings(&scene) {
+    for w in caustic::integrator::lint::warnings(&scene) {
         println!("warning: {w}");
     }
     Ok(())

@@ -36,6 +36,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             seed: args.seed,
             photons: args.photons,
             triangle_test: args.accel.backend.triangle_test(),
+            integrator: args.integrator.map(Into::into),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),

@@ -155,6 +155,7 @@ impl<'a> PhotonTracer<'a> {
             .map(|light| {
                 let casters = match light {
                     Light::Point { .. } => casters.clone(),
+                    Light::Environment { .. } => Vec::new(),
                     // Entirely behind the emitting plane: every direction to
                     // it has cos θ ≤ 0 and carries no power.
                     Light::Area(a) => casters
@@ -186,7 +187,7 @@ impl<'a> PhotonTracer<'a> {
             cdf,
             count,
             seed: scene.settings.seed,
-            max_depth: scene.settings.max_depth,
+            max_depth: scene.settings.whitted_depth(),
         }
     }
 
@@ -236,6 +237,8 @@ impl<'a> PhotonTracer<'a> {
                     }
                 }
             }
+            // Environments emit no photons: they have no casters (`new`).
+            Light::Environment { .. } => return None,
         };
         Some(PhotonPath {
             index,

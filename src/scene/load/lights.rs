@@ -1,4 +1,4 @@
-//! The `[[lights]]`: point lights and area lights, with the limit and
+//! The `[[lights]]`: point, area and environment lights, with the limit and
 //! default of an area light's shadow samples.
 
 use super::ctx::Ctx;
@@ -19,7 +19,6 @@ impl Ctx<'_> {
             ("v", l.v.as_ref().map(|s| s.span())),
             ("samples", l.samples.as_ref().map(|s| s.span())),
         ];
-        let position = self.vec3(&l.position, "position")?;
         let colour = match &l.colour {
             None => Vec3A::ONE,
             Some(s) => self.colour(s, "colour")?,
@@ -36,19 +35,31 @@ impl Ctx<'_> {
         };
         let power = colour * intensity;
         if !power.is_finite() {
-            let span = l.intensity.as_ref().map_or(l.position.span(), |s| s.span());
+            let span = l.intensity.as_ref().map_or(l.kind.span(), |s| s.span());
             return Err(self.invalid(span, "`colour` × `intensity` overflows single precision"));
         }
         match l.kind.get_ref() {
             LightKind::Point => {
                 self.only_keys("a point light", &present, &["type", "position", "colour", "intensity"])?;
+                let position = self.required(&l.position, "position", "a point light", l.kind.span())?;
                 Ok(Light::Point {
-                    position,
+                    position: self.vec3(position, "position")?,
                     intensity: power,
                 })
             }
+            LightKind::Environment => {
+                let present = [
+                    ("u", l.u.as_ref().map(|s| s.span())),
+                    ("v", l.v.as_ref().map(|s| s.span())),
+                    ("samples", l.samples.as_ref().map(|s| s.span())),
+                    ("position", l.position.as_ref().map(|s| s.span())),
+                ];
+                self.only_keys("an environment light", &present, &["type", "colour", "intensity"])?;
+                Ok(Light::Environment { radiance: power })
+            }
             LightKind::Area => {
                 let what = "an area light";
+                let position = self.vec3(self.required(&l.position, "position", what, l.kind.span())?, "position")?;
                 let u_desc = self.required(&l.u, "u", what, l.kind.span())?;
                 let v_desc = self.required(&l.v, "v", what, l.kind.span())?;
                 let u = self.direction(u_desc, "u")?;

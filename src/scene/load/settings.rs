@@ -8,9 +8,10 @@ use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::Vec3A;
 use crate::scene::desc::{
-    CameraDesc, GatherName, PhotonsDesc, RenderDesc, SharingName, Spanned, ToneMapName, TriangleTestName,
+    CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SharingName, Spanned, ToneMapName,
+    TriangleTestName,
 };
-use crate::scene::{Camera, GatherMode, PhotonSettings, RenderSettings, SampleSharing};
+use crate::scene::{Camera, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing};
 
 /// Largest `max_depth`.
 pub const MAX_DEPTH: u32 = 64;
@@ -36,7 +37,10 @@ impl Ctx<'_> {
         let width = int(&r.width, d.width, "width", 1, MAX_IMAGE_SIDE)?;
         let height = int(&r.height, d.height, "height", 1, MAX_IMAGE_SIDE)?;
         let spp = int(&r.spp, d.spp, "spp", 1, u32::MAX)?;
-        let max_depth = int(&r.max_depth, d.max_depth, "max_depth", 0, MAX_DEPTH)?;
+        let max_depth = match &r.max_depth {
+            None => None,
+            Some(_) => Some(int(&r.max_depth, 0, "max_depth", 0, MAX_DEPTH)?),
+        };
         // Point at the key that makes the product too large (the first given).
         let size_span = [&r.width, &r.height, &r.spp]
             .into_iter()
@@ -95,6 +99,10 @@ impl Ctx<'_> {
             },
             photons: d.photons,
             medium: None,
+            integrator: match r.integrator {
+                None | Some(IntegratorName::Whitted) => IntegratorKind::Whitted,
+                Some(IntegratorName::Path) => IntegratorKind::Path,
+            },
         })
     }
 

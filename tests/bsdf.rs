@@ -1,0 +1,279 @@
+//! Every BSDF's sampling against its own `eval` and `pdf`: a chi-square test
+//! of the sampled directions against the density integrated over a grid of
+//! the sphere (as pbrt and Mitsuba test theirs), the value and density a
+//! sample reports against `eval` / `pdf`, reciprocity, and energy (no
+//! BSDF reflects more than it receives).
+
+use caustic::bsdf::{Bsdf, FresnelModel, Transport};
+use caustic::math::rng::Domain;
+use caustic::math::{Rng, Vec3A};
+use caustic::scene::{Coating, Conductor, Dielectric, Material, Mirror, ShadingModel};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+use std::f32::consts::PI;
+
+const THETA_BINS: usize = 16;
+const PHI_BINS: usize = 32;
+const SAMPLES: usize = 400_000;
+/// Significance of one test, before the correction for the number of tests.
+const ALPHA: f64 = 0.01;
+const TESTS: f64 = 16.0;
+
+fn direction(theta: f32, phi: f32) -> Vec3A {
+    Vec3A::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+}
+
+fn bin_of(w: Vec3A) -> usize {
+    let theta = w.z.clamp(-1.0, 1.0).acos();
+    let mut phi = w.y.atan2(w.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let t = ((theta / PI * THETA_BINS as f32) as usize).min(THETA_BINS - 1);
+    let p = ((phi / (2.0 * PI) * PHI_BINS as f32) as usize).min(PHI_BINS - 1);
+    t * PHI_BINS + p
+}
+
+/// Chi-square test of `bsdf`'s non-delta samples from `wo` against `pdf`.
+fn chi2(name: &str, bsdf: &Bsdf, wo: Vec3A) {
+    let mut rng = Rng::new(7, Domain::Analysis, name.len() as u64, (wo.z * 1000.0) as u64);
+    let mut observed = vec![0.0f64; THETA_BINS * PHI_BINS];
+    for _ in 0..SAMPLES {
+        let (uc, u) = (rng.f32(), rng.vec2());
+        if let Some(s) = bsdf.sample(wo, uc, u) {
+            if !s.delta {
+                observed[bin_of(s.wi)] += 1.0;
+                // The sample's value and density are the BSDF's own.
+                let (f, pdf) = (bsdf.eval(wo, s.wi), bsdf.pdf(wo, s.wi));
+                assert!(
+                    (s.pdf - pdf).abs() <= 1e-3 * pdf.max(1.0),
+                    "{name}: sample pdf {} vs pdf() {pdf} at {}",
+                    s.pdf,
+                    s.wi
+                );
+                assert!(
+                    (s.f - f).abs().max_element() <= 1e-3 * f.max_element().max(1.0),
+                    "{name}: sample f {} vs eval() {f}",
+                    s.f
+                );
+            }
+        }
+    }
+    // Expected counts: the density integrated over each bin (midpoint rule
+    // on a sub-grid, sin θ dθ dφ).
+    let sub = 32;
+    let (dt, dp) = (PI / THETA_BINS as f32, 2.0 * PI / PHI_BINS as f32);
+    let mut expected = vec![0.0f64; THETA_BINS * PHI_BINS];
+    for t in 0..THETA_BINS {
+        for p in 0..PHI_BINS {
+            let mut sum = 0.0f64;
+            for i in 0..sub {
+                for j in 0..sub {
+                    let theta = (t as f32 + (i as f32 + 0.5) / sub as f32) * dt;
+                    let phi = (p as f32 + (j as f32 + 0.5) / sub as f32) * dp;
+                    let w = direction(theta, phi);
+                    sum += (bsdf.pdf(wo, w) * theta.sin()) as f64;
+                }
+            }
+            expected[t * PHI_BINS + p] = sum * (dt * dp) as f64 / (sub * sub) as f64 * SAMPLES as f64;
+        }
+    }
+    // Pool the bins with few expected samples (Cochran's rule).
+    let mut order: Vec<usize> = (0..expected.len()).collect();
+    order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
+    let (mut chi, mut dof) = (0.0f64, 0i64);
+    let (mut pool_e, mut pool_o) = (0.0, 0.0);
+    for &i in &order {
+        if expected[i] == 0.0 {
+            assert!(
+                observed[i] == 0.0,
+                "{name}: {} samples in bin {i} where the density is zero",
+                observed[i]
+            );
+            continue;
+        }
+        if expected[i] < 5.0 {
+            pool_e += expected[i];
+            pool_o += observed[i];
+            continue;
+        }
+        chi += (observed[i] - expected[i]).powi(2) / expected[i];
+        dof += 1;
+    }
+    if pool_e > 0.0 {
+        chi += (pool_o - pool_e).powi(2) / pool_e;
+        dof += 1;
+    }
+    let dof = (dof - 1).max(1) as f64;
+    let p_value = 1.0 - ChiSquared::new(dof).unwrap().cdf(chi);
+    assert!(
+        p_value > ALPHA / TESTS,
+        "{name} from {wo}: chi² = {chi:.1} with {dof} degrees of freedom, p = {p_value:.2e}"
+    );
+}
+
+fn report(diffuse: f32, specular: f32, shininess: f32, model: ShadingModel) -> Material {
+    let mut m = Material::diffuse("m", Vec3A::splat(diffuse));
+    m.specular = Vec3A::splat(specular);
+    m.shininess = shininess;
+    m.model = model;
+    m
+}
+
+fn gold(roughness: f32) -> Material {
+    let mut m = Material::diffuse("gold", Vec3A::ZERO);
+    m.conductor = Some(Conductor {
+        eta: Vec3A::new(0.143, 0.375, 1.442),
+        k: Vec3A::new(3.983, 2.386, 1.603),
+        roughness,
+    });
+    m
+}
+
+fn glass(roughness: f32) -> Material {
+    let mut m = Material::diffuse("glass", Vec3A::ZERO);
+    m.dielectric = Some(Dielectric {
+        roughness,
+        ..Dielectric::smooth(1.5, Vec3A::ONE)
+    });
+    m
+}
+
+fn plastic(albedo: f32) -> Material {
+    let mut m = Material::diffuse("plastic", Vec3A::new(albedo, 0.5 * albedo, 0.2));
+    m.coating = Some(Coating { ior: 1.5 });
+    m
+}
+
+fn bsdf(m: &Material) -> Bsdf {
+    Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance)
+}
+
+fn outgoing() -> [Vec3A; 3] {
+    [Vec3A::new(0.0, 0.0, 1.0), direction(0.7, 0.4), direction(1.3, 2.0)]
+}
+
+#[test]
+fn diffuse_and_report_lobes_sample_their_density() {
+    for wo in outgoing() {
+        chi2("lambert", &bsdf(&Material::diffuse("d", Vec3A::splat(0.7))), wo);
+        chi2("phong", &bsdf(&report(0.4, 0.5, 20.0, ShadingModel::Phong)), wo);
+        chi2(
+            "blinn-phong",
+            &bsdf(&report(0.3, 0.6, 40.0, ShadingModel::BlinnPhong)),
+            wo,
+        );
+    }
+    // A mirror mixed with the surface: only the non-delta part is tested.
+    let mut m = report(0.5, 0.3, 30.0, ShadingModel::Phong);
+    m.mirror = Some(Mirror {
+        reflectivity: 0.4,
+        tint: Vec3A::ONE,
+    });
+    chi2("phong + mirror", &bsdf(&m), direction(0.5, 1.0));
+}
+
+#[test]
+fn microfacet_lobes_sample_their_density() {
+    for wo in outgoing() {
+        chi2("rough gold 0.3", &bsdf(&gold(0.3)), wo);
+        chi2("rough gold 0.6", &bsdf(&gold(0.6)), wo);
+        chi2("plastic", &bsdf(&plastic(0.8)), wo);
+    }
+    // Rough glass from outside and from inside (transmission included).
+    for wo in [
+        direction(0.3, 0.1),
+        direction(1.0, 1.0),
+        direction(PI - 0.4, 3.0),
+        direction(PI - 1.1, 0.5),
+    ] {
+        chi2("rough glass 0.3", &bsdf(&glass(0.3)), wo);
+        chi2("rough glass 0.6", &bsdf(&glass(0.6)), wo);
+    }
+}
+
+#[test]
+fn reflection_is_reciprocal() {
+    let mut rng = Rng::new(11, Domain::Analysis, 0, 0);
+    let materials = [
+        report(0.4, 0.5, 20.0, ShadingModel::Phong),
+        report(0.3, 0.6, 40.0, ShadingModel::BlinnPhong),
+        gold(0.3),
+        plastic(0.7),
+        glass(0.4),
+    ];
+    for m in &materials {
+        let b = bsdf(m);
+        for _ in 0..2000 {
+            let a = caustic::math::sampling::cosine_hemisphere(rng.vec2());
+            let c = caustic::math::sampling::cosine_hemisphere(rng.vec2());
+            let (f1, f2) = (b.eval(a, c), b.eval(c, a));
+            assert!(
+                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1.0),
+                "{}: f({a}, {c}) = {f1} but f({c}, {a}) = {f2}",
+                m.name
+            );
+        }
+    }
+}
+
+/// Mean of `weight()` over many samples: the directional albedo.
+fn albedo(b: &Bsdf, wo: Vec3A, rng: &mut Rng) -> (Vec3A, f32) {
+    let n = 200_000;
+    let mut sum = Vec3A::ZERO;
+    let mut sum2 = 0.0f64;
+    for _ in 0..n {
+        if let Some(s) = b.sample(wo, rng.f32(), rng.vec2()) {
+            let w = s.weight();
+            sum += w;
+            sum2 += (w.max_element() as f64).powi(2);
+        }
+    }
+    let mean = sum / n as f32;
+    let var = (sum2 / n as f64 - (mean.max_element() as f64).powi(2)).max(0.0);
+    (mean, (var / n as f64).sqrt() as f32)
+}
+
+#[test]
+fn no_bsdf_reflects_more_than_it_receives() {
+    let mut rng = Rng::new(13, Domain::Analysis, 0, 0);
+    let mut white_mirror = report(0.0, 0.0, 1.0, ShadingModel::Phong);
+    white_mirror.mirror = Some(Mirror {
+        reflectivity: 1.0,
+        tint: Vec3A::ONE,
+    });
+    let cases = [
+        ("lambert 1", Material::diffuse("d", Vec3A::ONE)),
+        ("phong 0.5+0.5 n=1", report(0.5, 0.5, 1.0, ShadingModel::Phong)),
+        ("phong 0+1 n=50", report(0.0, 1.0, 50.0, ShadingModel::Phong)),
+        ("blinn 0+1 n=2", report(0.0, 1.0, 2.0, ShadingModel::BlinnPhong)),
+        ("blinn 0.3+0.7 n=200", report(0.3, 0.7, 200.0, ShadingModel::BlinnPhong)),
+        ("mirror", white_mirror),
+        ("rough gold", gold(0.5)),
+        ("plastic white", plastic(1.0)),
+    ];
+    for (name, m) in &cases {
+        let b = bsdf(m);
+        for wo in outgoing().into_iter().chain([direction(1.5, 0.0)]) {
+            let (a, sigma) = albedo(&b, wo, &mut rng);
+            assert!(
+                a.max_element() <= 1.0 + 4.0 * sigma + 2e-3,
+                "{name} from {wo}: albedo {a} (σ {sigma})"
+            );
+        }
+    }
+    // Glass: reflected + transmitted power is all of it (importance
+    // transport: radiance scaling across the interface is not energy).
+    for roughness in [0.0, 0.3] {
+        let b = Bsdf::for_material(&glass(roughness), FresnelModel::Exact, Transport::Importance);
+        for wo in [direction(0.4, 0.0), direction(PI - 0.3, 0.0)] {
+            let (a, sigma) = albedo(&b, wo, &mut rng);
+            assert!(
+                a.max_element() <= 1.0 + 4.0 * sigma + 2e-3,
+                "glass {roughness} from {wo}: {a}"
+            );
+            if roughness == 0.0 {
+                assert!((a.x - 1.0).abs() < 1e-3, "smooth glass loses energy: {a}");
+            }
+        }
+    }
+}
