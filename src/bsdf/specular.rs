@@ -3,7 +3,7 @@
 //! dielectric interface that camera paths and photons share.
 
 use crate::math::Vec3A;
-use crate::scene::SurfaceInteraction;
+use crate::scene::{FresnelModel, SurfaceInteraction};
 
 /// Mirror direction of `d` about the unit normal `n`: `d − 2(d·n)n`.
 #[inline]
@@ -38,6 +38,17 @@ pub fn fresnel_schlick(n1: f32, n2: f32, cos_i: f32, cos_t: f32) -> f32 {
     let c = if n1 > n2 { cos_t } else { cos_i };
     let m = (1.0 - c).clamp(0.0, 1.0);
     r0 + (1.0 - r0) * m * m * m * m * m
+}
+
+/// Fresnel reflectance from medium `n1` into `n2` with the formula `model`,
+/// given the cosines of the incident and transmitted directions (no total
+/// internal reflection: the caller handles it).
+#[inline]
+pub fn fresnel(model: FresnelModel, n1: f32, n2: f32, cos_i: f32, cos_t: f32) -> f32 {
+    match model {
+        FresnelModel::Schlick => fresnel_schlick(n1, n2, cos_i, cos_t),
+        FresnelModel::Exact => super::fresnel::dielectric(cos_i, n2 / n1).0,
+    }
 }
 
 /// The directions leaving a smooth dielectric interface, shared by camera

@@ -193,11 +193,15 @@ impl RenderPlan {
             })
             .collect();
         let mut specular_objects = 0;
+        let mut secondary_objects = 0;
         let mut dielectric_objects = 0;
         for o in &scene.objects {
             let m = &scene.materials[o.material as usize];
             if m.is_specular() {
                 specular_objects += 1;
+            }
+            if m.spawns_secondary() {
+                secondary_objects += 1;
             }
             if m.dielectric.is_some() {
                 dielectric_objects += 1;
@@ -209,13 +213,13 @@ impl RenderPlan {
         } else {
             s.whitted_depth()
         };
-        let secondary = if specular_objects == 0 {
+        let secondary = if secondary_objects == 0 {
             Secondary::NoSpecularObject
         } else if max_depth == 0 {
             Secondary::DepthZero
         } else {
             Secondary::Traced {
-                specular_objects,
+                specular_objects: secondary_objects,
                 dielectric_objects,
             }
         };

@@ -40,7 +40,8 @@ use super::photon::{GatherParams, PhotonMap, SiteCache};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
 use crate::bsdf::phong;
-use crate::bsdf::specular::{fresnel_schlick, reflect, DielectricInterface};
+use crate::bsdf::specular::{self, reflect, DielectricInterface};
+use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::sampling::stratified;
 use crate::math::{offset_ray_origin, Frame, Ray, Rng, Vec2, Vec3A};
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
@@ -198,7 +199,10 @@ impl<'a> Whitted<'a> {
         if let Some(d) = m.dielectric {
             return self.dielectric(ray, &si, m, d, depth, ctx);
         }
-        let local = self.direct(ray, &si, m, false, ctx);
+        if m.conductor.is_some() || m.coating.is_some() {
+            return self.layered(ray, &si, m, depth, ctx);
+        }
+        let local = self.direct(ray, &si, m, Local::Surface, ctx);
         match m.mirror {
             Some(mirror) if mirror.reflectivity > 0.0 => {
                 let r = mirror.reflectivity;
@@ -235,20 +239,25 @@ impl<'a> Whitted<'a> {
     /// shadow rays. `highlights_only` (dielectrics) keeps only the specular
     /// lobe of point lights, the one light a reflected ray can never find
     /// (area lights appear in the reflection itself).
-    fn direct(
-        &self,
-        ray: &Ray,
-        si: &SurfaceInteraction,
-        m: &Material,
-        highlights_only: bool,
-        ctx: &mut SampleContext,
-    ) -> Vec3A {
+    fn direct(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, local: Local, ctx: &mut SampleContext) -> Vec3A {
+        let highlights_only = matches!(local, Local::Highlights);
         let wo = -ray.dir;
         let (ng, ns) = facing(si, wo);
-        let mut out = if highlights_only || !self.plan.ambient {
+        let has_ambient = match local {
+            Local::Surface => true,
+            Local::Highlights => false,
+            Local::Bsdf(_) => m.coating.is_some(),
+        };
+        let mut out = if !has_ambient || !self.plan.ambient {
             Vec3A::ZERO
         } else {
             self.scene.settings.ambient * m.ambient
+        };
+        let frame = Frame::from_normal(ns);
+        let f = |wi: Vec3A| match local {
+            Local::Surface => brdf(m, ns, wi, wo),
+            Local::Highlights => specular_lobe(m, ns, wi, wo),
+            Local::Bsdf(b) => b.eval(frame.to_local(wo), frame.to_local(wi)),
         };
         if highlights_only && m.specular.max_element() <= 0.0 {
             return out;
@@ -268,12 +277,7 @@ impl<'a> Whitted<'a> {
                     if !self.unoccluded(si, *position, ctx) {
                         continue;
                     }
-                    let f = if highlights_only {
-                        specular_lobe(m, ns, wi, wo)
-                    } else {
-                        brdf(m, ns, wi, wo)
-                    };
-                    out += f * *intensity * (cos / d2);
+                    out += f(wi) * *intensity * (cos / d2);
                 }
                 (Light::Area(_), _) if highlights_only => {}
                 // Seen in rays that leave the scene only (the ambient term
@@ -313,7 +317,7 @@ impl<'a> Whitted<'a> {
                         if !self.unoccluded(si, q, ctx) {
                             continue;
                         }
-                        sum += brdf(m, ns, wi, wo) * (cos * cos_light / d2);
+                        sum += f(wi) * (cos * cos_light / d2);
                     }
                     out += sum * a.radiance * (area * weight);
                 }
@@ -344,6 +348,34 @@ impl<'a> Whitted<'a> {
         !self.accel.occluded(&ray, dist * (1.0 - SHADOW_EPSILON))
     }
 
+    /// A metal or a coated diffuse: direct light on its non-delta lobes
+    /// and, when it has one, the mirror reflection weighted by its Fresnel
+    /// reflectance (a rough metal shows no reflection in this model).
+    fn layered(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
+        let local = self.direct(ray, si, m, Local::Bsdf(&bsdf), ctx);
+        let weight = match (m.conductor, m.coating) {
+            (Some(c), _) if c.roughness == 0.0 => {
+                let (_, ns) = facing(si, -ray.dir);
+                crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k)
+            }
+            (_, Some(c)) => {
+                let (_, ns) = facing(si, -ray.dir);
+                Vec3A::splat(crate::bsdf::fresnel::dielectric(-ray.dir.dot(ns), c.ior).0)
+            }
+            _ => return local,
+        };
+        if !self.can_bounce(depth) {
+            return local;
+        }
+        let (ng, ns) = facing(si, -ray.dir);
+        let mut dir = reflect(ray.dir, ns);
+        if dir.dot(ng) <= 0.0 {
+            dir = reflect(ray.dir, ng);
+        }
+        local + weight * self.trace_secondary(si, dir, depth, ctx)
+    }
+
     /// A smooth dielectric interface (outside IOR 1, inside `d.ior`).
     fn dielectric(
         &self,
@@ -354,7 +386,7 @@ impl<'a> Whitted<'a> {
         depth: u32,
         ctx: &mut SampleContext,
     ) -> Vec3A {
-        let highlight = self.direct(ray, si, m, true, ctx);
+        let highlight = self.direct(ray, si, m, Local::Highlights, ctx);
         if !self.can_bounce(depth) {
             return highlight;
         }
@@ -368,7 +400,7 @@ impl<'a> Whitted<'a> {
             // Total internal reflection: all the light is reflected.
             return highlight + self.trace_secondary(si, reflected_dir, depth, ctx);
         };
-        let r = fresnel_schlick(n1, n2, cos_i, cos_t);
+        let r = specular::fresnel(d.fresnel.unwrap_or(FresnelModel::Schlick), n1, n2, cos_i, cos_t);
         if self.plan.spread() {
             // One branch, chosen with probability R / (1 − R) and divided by
             // that probability: R·L_r / R and (1−R)·tint·L_t / (1−R). The
@@ -391,6 +423,17 @@ impl<'a> Whitted<'a> {
             highlight + lr * r + d.tint * lt * (1.0 - r)
         }
     }
+}
+
+/// Which lobes `Whitted::direct` lights.
+#[derive(Clone, Copy)]
+enum Local<'b> {
+    /// The report's Phong surface: ambient, diffuse and highlight.
+    Surface,
+    /// The highlight alone, for point lights only (dielectrics).
+    Highlights,
+    /// The non-delta lobes of a metal or a coated diffuse.
+    Bsdf(&'b Bsdf),
 }
 
 /// Geometric and shading normals turned toward `wo` (the viewer), both by

@@ -127,6 +127,12 @@ impl Material {
             || self.conductor.is_some_and(|c| c.roughness == 0.0)
     }
 
+    /// True when the Whitted integrator follows a reflected or refracted ray
+    /// from this surface (specular materials and clear coatings).
+    pub fn spawns_secondary(&self) -> bool {
+        self.is_specular() || self.coating.is_some()
+    }
+
     /// True when the surface has a diffuse part that receives direct light
     /// and photons.
     pub fn is_diffuse(&self) -> bool {

@@ -47,11 +47,12 @@
 
 use super::map::Photon;
 use crate::accel::{Accel, Hit};
-use crate::bsdf::{fresnel_schlick, reflect, DielectricInterface};
+use crate::bsdf::{reflect, specular, DielectricInterface};
 use crate::integrator::fog;
 use crate::math::rng::{Domain, Rng};
 use crate::math::sampling::{cosine_hemisphere, morton_stratified, uniform_cone, uniform_sphere};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
+use crate::scene::FresnelModel;
 use crate::scene::{Light, Scene, Shape};
 use std::f32::consts::PI;
 
@@ -337,7 +338,8 @@ impl<'a> PhotonTracer<'a> {
             match refracted {
                 None => reflected,
                 Some((t, cos_i, cos_t)) => {
-                    if path.rng.f32() < fresnel_schlick(n1, n2, cos_i, cos_t) {
+                    let model = d.fresnel.unwrap_or(FresnelModel::Schlick);
+                    if path.rng.f32() < specular::fresnel(model, n1, n2, cos_i, cos_t) {
                         reflected
                     } else {
                         path.power *= d.tint;
@@ -345,6 +347,22 @@ impl<'a> PhotonTracer<'a> {
                     }
                 }
             }
+        } else if let Some(c) = m.conductor.filter(|c| c.roughness == 0.0) {
+            // A smooth metal reflects with its Fresnel colour.
+            if path.bounces >= self.max_depth {
+                return Step::Done;
+            }
+            let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
+                (-si.ng, -si.ns)
+            } else {
+                (si.ng, si.ns)
+            };
+            path.power *= crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k);
+            let mut dir = reflect(ray.dir, ns);
+            if dir.dot(ng) <= 0.0 {
+                dir = reflect(ray.dir, ng);
+            }
+            dir
         } else {
             let r = m.mirror.map_or(0.0, |mm| mm.reflectivity);
             let reflects = r > 0.0 && (r >= 1.0 || path.rng.f32() < r);

@@ -31,7 +31,13 @@ impl Ctx<'_> {
     }
 
     fn material(&self, name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
-        let diffuse = self.reflectance(&m.diffuse, "diffuse", Vec3A::splat(DEFAULT_DIFFUSE))?;
+        // Glass and metals have no diffuse term: absent, it is black.
+        let default_diffuse = if m.dielectric.is_some() || m.conductor.is_some() {
+            Vec3A::ZERO
+        } else {
+            Vec3A::splat(DEFAULT_DIFFUSE)
+        };
+        let diffuse = self.reflectance(&m.diffuse, "diffuse", default_diffuse)?;
         let ambient = self.reflectance(&m.ambient, "ambient", diffuse)?;
         let specular = self.reflectance(&m.specular, "specular", Vec3A::ZERO)?;
         let shininess = match &m.shininess {

@@ -1,0 +1,293 @@
+#!/usr/bin/env python3
+"""Renders the same scenes with caustic's path integrator and with Mitsuba 3
+(variant scalar_rgb, `path` integrator, box pixel filter) and prints, per
+scene, relMSE (epsilon 1e-2) and the ratio of the mean of each channel.
+
+Scenes: Mitsuba's Cornell box (diffuse); the same box with a mirror sphere
+and a glass sphere instead of the blocks; the box with a rough gold sphere,
+a rough glass sphere and a plastic sphere.
+
+Usage:
+  python3 -m pip install mitsuba numpy      # once (a virtual environment is fine)
+  scripts/validate-mitsuba.py [--spp-caustic N] [--spp-mitsuba N] [--size 256]
+                              [--out DIR] [--scenes cornell,specular,materials]
+                              [--equal-time SECONDS,...]
+
+With --equal-time, each renderer renders the Cornell box for (about) the
+given wall times instead, and the script prints relMSE against the converged
+caustic reference of the same run (time against error, both curves).
+"""
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+try:
+    import mitsuba as mi
+except ImportError:
+    sys.exit("mitsuba is not installed: python3 -m pip install mitsuba numpy")
+
+mi.set_variant("scalar_rgb")
+from mitsuba import ScalarTransform4f as T  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+EPSILON = 1e-2
+
+
+# ---------------------------------------------------------------- scenes ---
+
+def matrix(transform):
+    return np.array(transform.matrix, dtype=np.float64).reshape(4, 4)
+
+
+def point(m, p):
+    return (m @ np.array([*p, 1.0]))[:3]
+
+
+def vector(m, v):
+    return (m @ np.array([*v, 0.0]))[:3]
+
+
+def fmt(v):
+    return "[" + ", ".join(f"{x:.9g}" for x in v) + "]"
+
+
+def cornell(size, boxes=True):
+    """Mitsuba's Cornell box dictionary, with a box filter and no integrator
+    settings of its own; `boxes=False` removes the two blocks."""
+    d = mi.cornell_box()
+    d["sensor"]["film"]["width"] = size
+    d["sensor"]["film"]["height"] = size
+    d["sensor"]["film"]["rfilter"] = {"type": "box"}
+    d["integrator"] = {"type": "path", "max_depth": -1}
+    if not boxes:
+        del d["small-box"]
+        del d["large-box"]
+    return d
+
+
+def with_specular_spheres(d):
+    d["mirror"] = {"type": "conductor", "material": "none"}
+    d["glass"] = {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
+    d["mirror-sphere"] = {"type": "sphere", "center": [-0.45, -0.65, -0.3], "radius": 0.35,
+                          "bsdf": {"type": "ref", "id": "mirror"}}
+    d["glass-sphere"] = {"type": "sphere", "center": [0.45, -0.65, 0.25], "radius": 0.35,
+                         "bsdf": {"type": "ref", "id": "glass"}}
+    return d
+
+
+GOLD_ETA = [0.143036, 0.375307, 1.44205]
+GOLD_K = [3.983, 2.38556, 1.60336]
+
+
+def with_material_spheres(d):
+    d["rough-gold"] = {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2,
+                       "eta": {"type": "rgb", "value": GOLD_ETA}, "k": {"type": "rgb", "value": GOLD_K}}
+    d["rough-glass"] = {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.15,
+                        "int_ior": 1.5, "ext_ior": 1.0}
+    d["plastic"] = {"type": "plastic", "int_ior": 1.5, "ext_ior": 1.0, "nonlinear": False,
+                    "diffuse_reflectance": {"type": "rgb", "value": [0.1, 0.27, 0.36]}}
+    for name, bsdf, center in [("gold-sphere", "rough-gold", [-0.55, -0.7, -0.25]),
+                               ("glass-sphere", "rough-glass", [0.0, -0.7, 0.3]),
+                               ("plastic-sphere", "plastic", [0.55, -0.7, -0.25])]:
+        d[name] = {"type": "sphere", "center": center, "radius": 0.3, "bsdf": {"type": "ref", "id": bsdf}}
+    return d
+
+
+def caustic_material(name, bsdf):
+    t = bsdf["type"]
+    lines = [f"[materials.{name}]"]
+    if t == "diffuse":
+        lines.append(f"diffuse = {fmt(bsdf['reflectance']['value'])}")
+    elif t == "conductor" and bsdf.get("material") == "none":
+        lines += ["ambient = [0, 0, 0]", "diffuse = [0, 0, 0]", "mirror = { reflectivity = 1.0 }"]
+    elif t == "dielectric":
+        lines += ["diffuse = [0, 0, 0]", f"dielectric = {{ ior = {bsdf['int_ior']} }}"]
+    elif t == "roughconductor":
+        lines += ["diffuse = [0, 0, 0]",
+                  f"conductor = {{ eta = {fmt(bsdf['eta']['value'])}, k = {fmt(bsdf['k']['value'])}, "
+                  f"roughness = {bsdf['alpha']} }}"]
+    elif t == "roughdielectric":
+        lines += ["diffuse = [0, 0, 0]", f"dielectric = {{ ior = {bsdf['int_ior']}, roughness = {bsdf['alpha']} }}"]
+    elif t == "plastic":
+        lines += [f"diffuse = {fmt(bsdf['diffuse_reflectance']['value'])}",
+                  f"coating = {{ ior = {bsdf['int_ior']} }}"]
+    else:
+        raise ValueError(f"no caustic equivalent for {t}")
+    return "\n".join(lines)
+
+
+def caustic_scene(d, spp, seed=1):
+    """The caustic scene file equivalent to Mitsuba dictionary `d`."""
+    sensor = d["sensor"]
+    film = sensor["film"]
+    if film["width"] != film["height"]:
+        raise ValueError("square films only (fov_axis 'smaller' is then the vertical fov)")
+    m = matrix(sensor["to_world"])
+    origin = point(m, [0, 0, 0])
+    out = [
+        "[render]",
+        f"width = {film['width']}",
+        f"height = {film['height']}",
+        f"spp = {spp}",
+        f"seed = {seed}",
+        'integrator = "path"',
+        'tone_map = "clamp"',
+        "",
+        "[camera]",
+        f"position = {fmt(origin)}",
+        f"look_at = {fmt(origin + vector(m, [0, 0, 1]))}",
+        f"up = {fmt(vector(m, [0, 1, 0]))}",
+        f"vfov = {sensor['fov']}",
+        "",
+    ]
+    for key, value in d.items():
+        if isinstance(value, dict) and value.get("type") in (
+                "diffuse", "conductor", "dielectric", "roughconductor", "roughdielectric", "plastic"):
+            out += [caustic_material(key, value), ""]
+    for key, value in d.items():
+        if not isinstance(value, dict):
+            continue
+        t = value.get("type")
+        if t == "rectangle":
+            m = matrix(value["to_world"])
+            corner, u, v = point(m, [-1, -1, 0]), vector(m, [2, 0, 0]), vector(m, [0, 2, 0])
+            if "emitter" in value:
+                out += ["[[lights]]", 'type = "area"', f"position = {fmt(point(m, [0, 0, 0]))}",
+                        f"u = {fmt(u)}", f"v = {fmt(v)}",
+                        f"colour = {fmt(value['emitter']['radiance']['value'])}", "intensity = 1.0", ""]
+                continue
+            out += ["[[objects]]", f'name = "{key}"', 'type = "quad"', f"corner = {fmt(corner)}",
+                    f"u = {fmt(u)}", f"v = {fmt(v)}", f'material = "{value["bsdf"]["id"]}"', ""]
+        elif t == "cube":
+            m = matrix(value["to_world"])
+            # The six faces of [-1, 1]^3, each facing outward (u × v).
+            faces = [([-1, -1, 1], [2, 0, 0], [0, 2, 0]), ([-1, 1, -1], [2, 0, 0], [0, -2, 0]),
+                     ([1, -1, -1], [0, 2, 0], [0, 0, 2]), ([-1, -1, 1], [0, 2, 0], [0, 0, -2]),
+                     ([-1, 1, -1], [0, 0, 2], [2, 0, 0]), ([-1, -1, -1], [2, 0, 0], [0, 0, 2])]
+            for i, (c, a, b) in enumerate(faces):
+                out += ["[[objects]]", f'name = "{key} {i}"', 'type = "quad"', f"corner = {fmt(point(m, c))}",
+                        f"u = {fmt(vector(m, a))}", f"v = {fmt(vector(m, b))}",
+                        f'material = "{value["bsdf"]["id"]}"', ""]
+        elif t == "sphere":
+            out += ["[[objects]]", f'name = "{key}"', 'type = "sphere"', f"center = {fmt(value['center'])}",
+                    f"radius = {value['radius']}", f'material = "{value["bsdf"]["id"]}"', ""]
+    return "\n".join(out)
+
+
+SCENES = {
+    "cornell": lambda size: cornell(size),
+    "specular": lambda size: with_specular_spheres(cornell(size, boxes=False)),
+    "materials": lambda size: with_material_spheres(cornell(size, boxes=False)),
+}
+
+
+# ------------------------------------------------------------- rendering ---
+
+def caustic_binary(given):
+    if given:
+        return given
+    subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    return os.path.join(ROOT, "target", "release", "caustic")
+
+
+def render_caustic(binary, toml_text, out_dir, name, spp=None, seconds=None, seed=1):
+    scene = os.path.join(out_dir, f"{name}.toml")
+    with open(scene, "w") as f:
+        f.write(toml_text)
+    exr = os.path.join(out_dir, f"{name}-caustic.exr")
+    cmd = [binary, "render", scene, "--exr", exr, "--quiet", "--seed", str(seed)]
+    if spp is not None:
+        cmd += ["--spp", str(spp)]
+    start = time.time()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    wall = time.time() - start
+    return np.array(mi.Bitmap(exr), dtype=np.float64)[:, :, :3], wall
+
+
+def render_mitsuba(d, spp, seed=0):
+    scene = mi.load_dict(d)
+    start = time.time()
+    img = mi.render(scene, spp=spp, seed=seed)
+    wall = time.time() - start
+    return np.array(img, dtype=np.float64)[:, :, :3], wall
+
+
+def relmse(x, ref):
+    return float(np.mean((x - ref) ** 2 / (ref ** 2 + EPSILON)))
+
+
+def mean_ratio(x, ref):
+    return [float(x[:, :, c].mean() / ref[:, :, c].mean()) for c in range(3)]
+
+
+def save_exr(path, img):
+    mi.Bitmap(img.astype(np.float32)).write(path)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--spp-caustic", type=int, default=8192)
+    ap.add_argument("--spp-mitsuba", type=int, default=4096)
+    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--out", default="validation")
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--equal-time", default="", help="comma-separated wall times in seconds (Cornell box)")
+    ap.add_argument("--json", help="also write the results as JSON")
+    ap.add_argument("--binary", help="the caustic binary to run (default: built with cargo)")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    binary = caustic_binary(args.binary)
+    results = []
+    if args.equal_time:
+        results = equal_time(binary, args)
+    else:
+        print(f"{'scene':<10} {'caustic spp':>11} {'s':>7} {'mitsuba spp':>11} {'s':>7} {'relMSE':>10}  mean ratio R G B")
+        for name in args.scenes.split(","):
+            d = SCENES[name](args.size)
+            ours, t_ours = render_caustic(binary, caustic_scene(d, args.spp_caustic), args.out, name)
+            theirs, t_theirs = render_mitsuba(d, args.spp_mitsuba)
+            save_exr(os.path.join(args.out, f"{name}-mitsuba.exr"), theirs)
+            e, r = relmse(ours, theirs), mean_ratio(ours, theirs)
+            print(f"{name:<10} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} {t_theirs:>7.1f} "
+                  f"{e:>10.3e}  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}", flush=True)
+            results.append({"scene": name, "caustic_spp": args.spp_caustic, "caustic_seconds": t_ours,
+                            "mitsuba_spp": args.spp_mitsuba, "mitsuba_seconds": t_theirs,
+                            "relmse": e, "mean_ratio": r})
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=2)
+
+
+def equal_time(binary, args):
+    """Time against error on the Cornell box: each renderer at increasing
+    sample counts, error against a converged caustic reference."""
+    d = SCENES["cornell"](args.size)
+    ref, t_ref = render_caustic(binary, caustic_scene(d, args.spp_caustic), args.out, "cornell-reference", seed=99)
+    print(f"reference: caustic {args.spp_caustic} spp in {t_ref:.1f} s")
+    # Seconds per sample per pixel of each renderer, measured at 16 spp.
+    _, t_c = render_caustic(binary, caustic_scene(d, 16), args.out, "cornell-probe", seed=3)
+    _, t_m = render_mitsuba(d, 16, seed=3)
+    rows = []
+    print(f"{'renderer':<8} {'target s':>8} {'spp':>6} {'wall s':>8} {'relMSE':>10}")
+    for target in [float(x) for x in args.equal_time.split(",")]:
+        for who, per in (("caustic", t_c / 16), ("mitsuba", t_m / 16)):
+            spp = max(1, int(round(target / per)))
+            if who == "caustic":
+                img, wall = render_caustic(binary, caustic_scene(d, spp), args.out, f"cornell-{spp}", seed=5)
+            else:
+                img, wall = render_mitsuba(d, spp, seed=5)
+            e = relmse(img, ref)
+            print(f"{who:<8} {target:>8.2f} {spp:>6} {wall:>8.2f} {e:>10.3e}", flush=True)
+            rows.append({"renderer": who, "target_seconds": target, "spp": spp, "seconds": wall, "relmse": e})
+    return rows
+
+
+if __name__ == "__main__":
+    main()
