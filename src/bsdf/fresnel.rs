@@ -44,8 +44,21 @@ pub fn schlick(cos_i: f32, eta: f32) -> (f32, f32) {
         return (1.0, 0.0);
     }
     let (n1, n2) = if cos_i >= 0.0 { (1.0, eta) } else { (eta, 1.0) };
-    let r = super::specular::fresnel_schlick(n1, n2, cos_i.abs(), cos_t.abs());
+    let r = fresnel_schlick(n1, n2, cos_i.abs(), cos_t.abs());
     (r, cos_t)
+}
+
+/// Schlick's approximation of the Fresnel reflectance from medium `n1` into
+/// `n2`: `R = R0 + (1 − R0)(1 − cos θ)^5`, `R0 = ((n1 − n2)/(n1 + n2))²`.
+/// From the denser medium (`n1 > n2`) the angle is the transmitted one,
+/// `θt` (Schlick 1994; pbrt §8.2): with `θi` the curve would not reach 1 at
+/// the critical angle. Total internal reflection must be handled before.
+#[inline]
+pub fn fresnel_schlick(n1: f32, n2: f32, cos_i: f32, cos_t: f32) -> f32 {
+    let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
+    let c = if n1 > n2 { cos_t } else { cos_i };
+    let m = (1.0 - c).clamp(0.0, 1.0);
+    r0 + (1.0 - r0) * m * m * m * m * m
 }
 
 /// Exact Fresnel reflectance of a conductor of complex index `eta + i k`

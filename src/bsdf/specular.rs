@@ -2,6 +2,7 @@
 //! total internal reflection, Schlick's Fresnel approximation, and the
 //! dielectric interface that camera paths and photons share.
 
+pub use super::fresnel::fresnel_schlick;
 use crate::math::Vec3A;
 use crate::scene::{FresnelModel, SurfaceInteraction};
 
@@ -25,19 +26,6 @@ pub fn refract(d: Vec3A, n: Vec3A, eta: f32) -> Option<(Vec3A, f32, f32)> {
     let cos_t = (1.0 - sin2_t).sqrt();
     let t = d * eta + n * (eta * cos_i - cos_t);
     Some((t.normalize(), cos_i, cos_t))
-}
-
-/// Schlick's approximation of the Fresnel reflectance from medium `n1` into
-/// `n2`: `R = R0 + (1 − R0)(1 − cos θ)^5`, `R0 = ((n1 − n2)/(n1 + n2))²`.
-/// From the denser medium (`n1 > n2`) the angle is the transmitted one,
-/// `θt` (Schlick 1994; pbrt §8.2): with `θi` the curve would not reach 1 at
-/// the critical angle. Total internal reflection must be handled before.
-#[inline]
-pub fn fresnel_schlick(n1: f32, n2: f32, cos_i: f32, cos_t: f32) -> f32 {
-    let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
-    let c = if n1 > n2 { cos_t } else { cos_i };
-    let m = (1.0 - c).clamp(0.0, 1.0);
-    r0 + (1.0 - r0) * m * m * m * m * m
 }
 
 /// Fresnel reflectance from medium `n1` into `n2` with the formula `model`,
