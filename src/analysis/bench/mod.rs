@@ -119,15 +119,23 @@ pub fn default_accels() -> Vec<AccelKind> {
     }
 }
 
-/// The scene benched when none is given: `scenes/dragon.toml` of the current
-/// directory, else the one of the source tree this binary was built from.
-pub fn default_scene() -> PathBuf {
-    let relative = PathBuf::from("scenes/dragon.toml");
-    if relative.exists() {
-        relative
-    } else {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon.toml")
-    }
+/// The scenes benched when none is given: the dragon showcase
+/// (`scenes/dragon.toml`) and the dragon mesh alone
+/// (`scenes/dragon-mesh.toml`, where every ray that hits anything hits
+/// triangles), from the current directory, else from the source tree this
+/// binary was built from.
+pub fn default_scenes() -> Vec<PathBuf> {
+    ["scenes/dragon.toml", "scenes/dragon-mesh.toml"]
+        .into_iter()
+        .map(|name| {
+            let relative = PathBuf::from(name);
+            if relative.exists() {
+                relative
+            } else {
+                Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
+            }
+        })
+        .collect()
 }
 
 /// Why a bench could not run.
@@ -174,5 +182,22 @@ impl BenchError {
             BenchError::Accel { source, .. } => matches!(source, AccelError::Unavailable(_) | AccelError::Scene(_)),
             _ => true,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_scenes_are_the_dragon_showcase_and_the_mesh_alone() {
+        let scenes = default_scenes();
+        assert_eq!(scenes.len(), 2);
+        assert!(scenes.iter().all(|p| p.exists()), "{scenes:?}");
+        let mesh_only = crate::scene::load_scene(&scenes[1]).unwrap();
+        assert!(mesh_only
+            .objects
+            .iter()
+            .all(|o| matches!(o.shape, crate::scene::Shape::Mesh { .. })));
     }
 }

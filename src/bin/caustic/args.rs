@@ -290,7 +290,7 @@ pub struct ConvergeArgs {
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Scene files (TOML). Default: scenes/dragon.toml.
+    /// Scene files (TOML). Default: scenes/dragon.toml and scenes/dragon-mesh.toml (the mesh alone).
     pub scenes: Vec<PathBuf>,
     /// Also write the report as JSON to this file.
     #[arg(long)]

@@ -206,7 +206,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
 pub fn run_bench(args: BenchArgs) -> Result<(), Failure> {
     use caustic::analysis::bench::{self, BenchOptions, RenderOverrides};
     let scenes = if args.scenes.is_empty() {
-        vec![bench::default_scene()]
+        bench::default_scenes()
     } else {
         args.scenes
     };
