@@ -13,9 +13,10 @@ Usage:
                               [--out DIR] [--scenes cornell,specular,materials]
                               [--equal-time SECONDS,...]
 
-With --equal-time, each renderer renders the Cornell box for (about) the
-given wall times instead, and the script prints relMSE against the converged
-caustic reference of the same run (time against error, both curves).
+With --equal-time SPP,SPP,..., both renderers render the Cornell box at those
+sample counts instead, and the script prints render time and relMSE against a
+converged Mitsuba image, and the ratio of the errors at equal time (time
+against error, both curves; --plot draws them).
 """
 
 import argparse
@@ -238,7 +239,10 @@ def main():
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--out", default="validation")
     ap.add_argument("--scenes", default=",".join(SCENES))
-    ap.add_argument("--equal-time", default="", help="comma-separated wall times in seconds (Cornell box)")
+    ap.add_argument("--equal-time", default="",
+                    help="comma-separated sample counts: time against error on the Cornell box")
+    ap.add_argument("--reference", help="converged Mitsuba EXR of the Cornell box for --equal-time")
+    ap.add_argument("--plot", help="PNG plot of the --equal-time curves (needs matplotlib)")
     ap.add_argument("--json", help="also write the results as JSON")
     ap.add_argument("--binary", help="the caustic binary to run (default: built with cargo)")
     args = ap.parse_args()
@@ -266,26 +270,64 @@ def main():
 
 
 def equal_time(binary, args):
-    """Time against error on the Cornell box: each renderer at increasing
-    sample counts, error against a converged caustic reference."""
+    """Time against error on the Cornell box: caustic's curve from `caustic
+    converge` (spp budgets, render time only), Mitsuba's from `mi.render` at
+    the same sample counts (render time only), both against Mitsuba's own
+    converged image (`--reference`, else rendered now at --spp-mitsuba)."""
     d = SCENES["cornell"](args.size)
-    ref, t_ref = render_caustic(binary, caustic_scene(d, args.spp_caustic), args.out, "cornell-reference", seed=99)
-    print(f"reference: caustic {args.spp_caustic} spp in {t_ref:.1f} s")
-    # Seconds per sample per pixel of each renderer, measured at 16 spp.
-    _, t_c = render_caustic(binary, caustic_scene(d, 16), args.out, "cornell-probe", seed=3)
-    _, t_m = render_mitsuba(d, 16, seed=3)
+    ref_path = args.reference
+    if not ref_path:
+        ref_path = os.path.join(args.out, "cornell-reference-mitsuba.exr")
+        ref, t = render_mitsuba(d, args.spp_mitsuba, seed=99)
+        save_exr(ref_path, ref)
+        print(f"reference: Mitsuba {args.spp_mitsuba} spp in {t:.1f} s", flush=True)
+    ref = np.array(mi.Bitmap(ref_path), dtype=np.float64)[:, :, :3]
+    ladder = [int(x) for x in args.equal_time.split(",")]
+    scene = os.path.join(args.out, "cornell-converge.toml")
+    with open(scene, "w") as f:
+        f.write(caustic_scene(d, 1, seed=5))
+    csv = os.path.join(args.out, "cornell-converge.csv")
+    subprocess.run([binary, "converge", scene, "--reference", ref_path, "--integrator", "path",
+                    "--budgets", ",".join(map(str, ladder)), "--accel", "embree", "--csv", csv, "--quiet"],
+                   check=True, stdout=subprocess.DEVNULL)
     rows = []
-    print(f"{'renderer':<8} {'target s':>8} {'spp':>6} {'wall s':>8} {'relMSE':>10}")
-    for target in [float(x) for x in args.equal_time.split(",")]:
-        for who, per in (("caustic", t_c / 16), ("mitsuba", t_m / 16)):
-            spp = max(1, int(round(target / per)))
-            if who == "caustic":
-                img, wall = render_caustic(binary, caustic_scene(d, spp), args.out, f"cornell-{spp}", seed=5)
-            else:
-                img, wall = render_mitsuba(d, spp, seed=5)
-            e = relmse(img, ref)
-            print(f"{who:<8} {target:>8.2f} {spp:>6} {wall:>8.2f} {e:>10.3e}", flush=True)
-            rows.append({"renderer": who, "target_seconds": target, "spp": spp, "seconds": wall, "relmse": e})
+    ours = []
+    with open(csv) as f:
+        header = f.readline().strip().split(",")
+        for line in f:
+            r = dict(zip(header, line.strip().split(",")))
+            ours.append((int(r["spp"]), float(r["seconds"]), float(r["relmse"])))
+    theirs = []
+    for spp in ladder:
+        img, wall = render_mitsuba(d, spp, seed=5)
+        theirs.append((spp, wall, relmse(img, ref)))
+    print(f"{'spp':>6} {'caustic s':>10} {'relMSE':>10} {'mitsuba s':>10} {'relMSE':>10}  "
+          f"mitsuba relMSE at caustic's time / caustic relMSE")
+    lt = np.log([t for _, t, _ in theirs])
+    le = np.log([e for _, _, e in theirs])
+    for (spp, t, e), (_, tm, em) in zip(ours, theirs):
+        at_time = float(np.exp(np.interp(np.log(t), lt, le))) if lt[0] <= np.log(t) <= lt[-1] else float("nan")
+        print(f"{spp:>6} {t:>10.3f} {e:>10.3e} {tm:>10.3f} {em:>10.3e}  {at_time / e:>6.2f}", flush=True)
+        rows.append({"spp": spp, "caustic_seconds": t, "caustic_relmse": e,
+                     "mitsuba_seconds": tm, "mitsuba_relmse": em,
+                     "mitsuba_relmse_at_equal_time": at_time})
+    if args.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
+        ax.loglog([t for _, t, _ in ours], [e for _, _, e in ours], "o-", label="caustic --integrator path (Embree)")
+        ax.loglog([t for _, t, _ in theirs], [e for _, _, e in theirs], "s-", label="Mitsuba 3 scalar_rgb, path")
+        for (spp, t, e) in ours:
+            ax.annotate(str(spp), (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        ax.set_xlabel("render time (s), 2 threads")
+        ax.set_ylabel(f"relMSE (epsilon {EPSILON}) against Mitsuba at {args.spp_mitsuba} spp")
+        ax.set_title(f"Cornell box {args.size}x{args.size}: error against time")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(args.plot)
+        print(f"written: {args.plot}")
     return rows
 
 

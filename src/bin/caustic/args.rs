@@ -240,6 +240,9 @@ pub struct ConvergeArgs {
     /// `caustic render SCENE --spp 256 --photons 10000000 --seed 7 --exr ref.exr`).
     #[arg(long)]
     pub reference: PathBuf,
+    /// Light transport algorithm (default: the scene's).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
     /// Budgets, comma-separated: SPP:PHOTONS (1:10000), SPP (photons from
     /// --photons-per-spp, else the scene's), or SECONDSs (2s: doubling search).
     #[arg(long, default_value = "1,2,4,8,16")]

@@ -132,6 +132,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         seed: args.seed,
         photons: args.photons,
         triangle_test: args.backend.triangle_test(),
+        integrator: args.integrator.map(Into::into),
         ..Overrides::default()
     }
     .apply(&mut scene, &args.scene)
