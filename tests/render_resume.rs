@@ -10,7 +10,7 @@ use caustic::integrator::render::PixelStrata;
 use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
 use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
 use caustic::math::sampling::{grid_for, stratified};
-use caustic::math::{Rng, Vec2, Vec3, Vec3A};
+use caustic::math::{Rng, Sampler, Vec3, Vec3A};
 use caustic::scene::{load_scene, Scene};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -206,9 +206,8 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
             let strata = PixelStrata::new(plan, plan.seed, pixel);
             let (mut sum, mut kept) = (Vec3A::ZERO, 0u32);
             for k in 0..spp {
-                let mut rng = Rng::for_pixel(plan.seed, pixel, k as u64);
-                let (jx, jy) = rng.f32x2();
-                let sub = stratified(k, gx, gy, Vec2::new(jx, jy));
+                let mut rng = Sampler::independent(Rng::for_pixel(plan.seed, pixel, k as u64));
+                let sub = stratified(k, gx, gy, rng.vec2());
                 let ray = scene
                     .camera
                     .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);

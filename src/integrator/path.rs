@@ -18,7 +18,7 @@ use super::plan::{RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
-use crate::math::{offset_ray_origin, Frame, Ray, Rng, Vec3A};
+use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
 
 /// Power heuristic weight of a strategy of density `a` against one of density `b`.
@@ -56,7 +56,7 @@ impl<'a> PathTracer<'a> {
 
     /// Radiance arriving along `ray` toward its origin, from the path's own
     /// random stream.
-    pub fn radiance(&self, ray: &Ray, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+    pub fn radiance(&self, ray: &Ray, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;

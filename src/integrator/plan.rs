@@ -8,6 +8,7 @@
 //! Each pass has its own "ran / skipped because ..." line in the `Display`
 //! output.
 
+use crate::math::SamplerKind;
 use crate::scene::{IntegratorKind, Light, SampleSharing, Scene};
 use std::fmt;
 
@@ -133,6 +134,8 @@ pub struct RenderPlan {
     pub max_depth: u32,
     /// The light transport algorithm.
     pub integrator: IntegratorKind,
+    /// The sample generator.
+    pub sampler: SamplerKind,
     /// Seed of the random streams.
     pub seed: u64,
     /// Ambient term active (scene ambient light is not black).
@@ -255,6 +258,7 @@ impl RenderPlan {
             spp,
             max_depth,
             integrator: s.integrator,
+            sampler: s.sampler_kind(),
             seed: s.seed,
             ambient: !path && s.ambient.max_element() > 0.0,
             lights,
@@ -345,12 +349,13 @@ impl RenderPlan {
         let mut stages = vec![Stage::ran(
             "camera rays",
             format!(
-                "{}x{} pixels x {} spp = {} rays (seed {})",
+                "{}x{} pixels x {} spp = {} rays (seed {}, {} sampler)",
                 self.width,
                 self.height,
                 self.spp,
                 pixels * self.spp as u64,
-                self.seed
+                self.seed,
+                self.sampler.name()
             ),
         )];
         if self.integrator == IntegratorKind::Path {

@@ -21,7 +21,7 @@ use crate::accel::Accel;
 use crate::film::{Accumulation, Film};
 use crate::math::rng::Domain;
 use crate::math::sampling::{grid_for, stratified};
-use crate::math::{Rng, Vec2, Vec3, Vec3A};
+use crate::math::{Rng, Sampler, SamplerKind, Vec3, Vec3A};
 use crate::scene::{IntegratorKind, Scene};
 use rayon::prelude::*;
 use std::fmt;
@@ -489,10 +489,13 @@ fn render_tile_pass(
             let mut sum = Vec3A::from(state.sum[i]);
             let mut kept = state.kept[i];
             for k in first..target {
-                let mut rng = Rng::for_pixel(seed, pixel, k as u64);
-                let (jx, jy) = rng.f32x2();
-                // Stratified jittered sub-pixel position (gx × gy = spp).
-                let sub = stratified(k, gx, gy, Vec2::new(jx, jy));
+                let mut rng = Sampler::new(plan.sampler, seed, pixel, k as u64);
+                let sub = match plan.sampler {
+                    // Stratified jittered sub-pixel position (gx × gy = spp).
+                    SamplerKind::Independent => stratified(k, gx, gy, rng.vec2()),
+                    // Sobol points are stratified over the pixel's samples.
+                    SamplerKind::Sobol => rng.vec2(),
+                };
                 let ray = camera.ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 out.rays.camera += 1;
                 let l = match integrator {

@@ -43,7 +43,7 @@ use crate::bsdf::phong;
 use crate::bsdf::specular::{self, reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::sampling::stratified;
-use crate::math::{offset_ray_origin, Frame, Ray, Rng, Vec2, Vec3A};
+use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
 use std::ops::AddAssign;
@@ -83,8 +83,8 @@ impl AddAssign for RayCounts {
 
 /// Per-sample state threaded through the recursion.
 pub struct SampleContext<'c> {
-    /// The sample's own random stream.
-    pub rng: Rng,
+    /// The sample's own numbers.
+    pub rng: Sampler,
     /// With spread sampling, which share `slot ∈ [0, spp)` of the area
     /// lights' strata this sample takes. Ignored when splitting.
     pub slot: u32,

@@ -21,6 +21,7 @@ use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, OutputErr
 use crate::geometry::TriangleTest;
 use crate::integrator::lint;
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
+use crate::math::SamplerKind;
 use crate::scene::{self, IntegratorKind, Scene, SceneError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -45,6 +46,8 @@ pub struct Overrides {
     pub triangle_test: Option<TriangleTest>,
     /// Light transport algorithm.
     pub integrator: Option<IntegratorKind>,
+    /// Sample generator.
+    pub sampler: Option<SamplerKind>,
 }
 
 impl Overrides {
@@ -66,6 +69,9 @@ impl Overrides {
         }
         if let Some(i) = self.integrator {
             s.integrator = i;
+        }
+        if let Some(k) = self.sampler {
+            s.sampler = Some(k);
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
             .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))

@@ -1,11 +1,13 @@
 //! Small math vocabulary shared by every module: rays, boxes, transforms,
-//! orthonormal frames, sampling, seeded random streams and robust ray offsets.
+//! orthonormal frames, sampling, seeded random streams, the per-sample
+//! sampler (independent or Sobol) and robust ray offsets.
 
 mod aabb;
 mod frame;
 mod offset;
 mod ray;
 pub mod rng;
+pub mod sampler;
 pub mod sampling;
 mod transform;
 
@@ -15,6 +17,7 @@ pub use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 pub use offset::offset_ray_origin;
 pub use ray::Ray;
 pub use rng::Rng;
+pub use sampler::{Sampler, SamplerKind};
 pub use transform::Transform;
 
 /// `gamma(n) = n·ε / (1 − n·ε)`, the rounding-error bound of pbrt-v3 §3.9.1

@@ -188,6 +188,18 @@ pub struct RenderDesc {
     pub sharing: Option<SharingName>,
     /// Light transport algorithm.
     pub integrator: Option<IntegratorName>,
+    /// Sample generator.
+    pub sampler: Option<SamplerName>,
+}
+
+/// Sampler names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SamplerName {
+    /// `"sobol"`.
+    Sobol,
+    /// `"independent"`.
+    Independent,
 }
 
 /// Integrator names.

@@ -12,7 +12,7 @@ pub mod metals;
 
 pub use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::{Hit, TriangleTest};
-use crate::math::{Aabb, Ray, Transform, Vec3A};
+use crate::math::{Aabb, Ray, SamplerKind, Transform, Vec3A};
 use std::sync::Arc;
 
 pub use crate::geometry::{Mesh, Quad, Sphere};
@@ -59,6 +59,14 @@ impl IntegratorKind {
 }
 
 impl RenderSettings {
+    /// The sampler this render uses.
+    pub fn sampler_kind(&self) -> SamplerKind {
+        self.sampler.unwrap_or(match self.integrator {
+            IntegratorKind::Whitted => SamplerKind::Independent,
+            IntegratorKind::Path => SamplerKind::Sobol,
+        })
+    }
+
     /// Specular bounces the Whitted integrator follows.
     pub fn whitted_depth(&self) -> u32 {
         self.max_depth.unwrap_or(DEFAULT_WHITTED_DEPTH)
@@ -80,6 +88,10 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Light transport algorithm.
     pub integrator: IntegratorKind,
+    /// Sample generator; `None`: the integrator's default (Sobol for path
+    /// tracing, independent for Whitted, whose own strata keep the original
+    /// images).
+    pub sampler: Option<SamplerKind>,
     /// Seed of every random stream.
     pub seed: u64,
     /// Tone mapping and exposure of the 8-bit output.
@@ -146,6 +158,7 @@ impl Default for RenderSettings {
             spp: 1,
             max_depth: None,
             integrator: IntegratorKind::Whitted,
+            sampler: None,
             seed: 0,
             output: OutputSettings::default(),
             ambient: Vec3A::ZERO,

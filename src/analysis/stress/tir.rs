@@ -152,7 +152,7 @@ fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64)
     let integrator = Whitted::new(scene, accel, &plan);
     let mut counts = RayCounts::default();
     let mut ctx = SampleContext {
-        rng: trial_rng(seed, CASE, 1 << 40 | i),
+        rng: crate::math::Sampler::independent(trial_rng(seed, CASE, 1 << 40 | i)),
         slot: 0,
         fresnel_stratum: None,
         counts: &mut counts,

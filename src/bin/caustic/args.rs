@@ -2,6 +2,7 @@
 //! the groups they share.
 
 use caustic::accel::{AccelKind, AccelOptions, TriangleTest};
+use caustic::math::SamplerKind;
 use caustic::scene::{IntegratorKind, Scene};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
@@ -19,6 +20,24 @@ impl From<AccelArg> for AccelKind {
             AccelArg::Embree => AccelKind::Embree,
             AccelArg::Kdtree => AccelKind::KdTree,
             AccelArg::Brute => AccelKind::Brute,
+        }
+    }
+}
+
+/// The sample generator.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SamplerArg {
+    /// Owen-scrambled Sobol points (low discrepancy).
+    Sobol,
+    /// Independent uniform numbers.
+    Independent,
+}
+
+impl From<SamplerArg> for SamplerKind {
+    fn from(a: SamplerArg) -> Self {
+        match a {
+            SamplerArg::Sobol => SamplerKind::Sobol,
+            SamplerArg::Independent => SamplerKind::Independent,
         }
     }
 }
@@ -140,6 +159,9 @@ pub struct RenderArgs {
     /// Light transport algorithm (default: the scene's `[render] integrator`, else whitted).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
+    /// Sample generator (default: the scene's, else sobol for path and independent for whitted).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerArg>,
     /// Override the image width.
     #[arg(long)]
     pub width: Option<u32>,
@@ -243,6 +265,9 @@ pub struct ConvergeArgs {
     /// Light transport algorithm (default: the scene's).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
+    /// Sample generator (default: the scene's, else sobol for path and independent for whitted).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerArg>,
     /// Budgets, comma-separated: SPP:PHOTONS (1:10000), SPP (photons from
     /// --photons-per-spp, else the scene's), or SECONDSs (2s: doubling search).
     #[arg(long, default_value = "1,2,4,8,16")]

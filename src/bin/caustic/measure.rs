@@ -133,6 +133,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         photons: args.photons,
         triangle_test: args.backend.triangle_test(),
         integrator: args.integrator.map(Into::into),
+        sampler: args.sampler.map(Into::into),
         ..Overrides::default()
     }
     .apply(&mut scene, &args.scene)

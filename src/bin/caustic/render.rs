@@ -37,6 +37,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             photons: args.photons,
             triangle_test: args.accel.backend.triangle_test(),
             integrator: args.integrator.map(Into::into),
+            sampler: args.sampler.map(Into::into),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),

@@ -6,9 +6,9 @@ use super::error::SceneError;
 use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
-use crate::math::Vec3A;
+use crate::math::{SamplerKind, Vec3A};
 use crate::scene::desc::{
-    CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SharingName, Spanned, ToneMapName,
+    CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName, SharingName, Spanned, ToneMapName,
     TriangleTestName,
 };
 use crate::scene::{Camera, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing};
@@ -99,6 +99,10 @@ impl Ctx<'_> {
             },
             photons: d.photons,
             medium: None,
+            sampler: r.sampler.map(|s| match s {
+                SamplerName::Sobol => SamplerKind::Sobol,
+                SamplerName::Independent => SamplerKind::Independent,
+            }),
             integrator: match r.integrator {
                 None | Some(IntegratorName::Whitted) => IntegratorKind::Whitted,
                 Some(IntegratorName::Path) => IntegratorKind::Path,
