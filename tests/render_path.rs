@@ -122,7 +122,10 @@ fn every_scene_renders_in_path_mode() {
         // Under water every light path crosses the smooth water surface
         // (light → specular → diffuse): two samples per pixel rarely find one.
         // A scene of glass alone has nothing diffuse to light.
-        let diffuse = scene.objects.iter().any(|o| scene.materials[o.material as usize].is_diffuse());
+        let diffuse = scene
+            .objects
+            .iter()
+            .any(|o| scene.materials[o.material as usize].is_diffuse());
         if path.ends_with("underwater.toml") || !diffuse {
             continue;
         }

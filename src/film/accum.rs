@@ -25,7 +25,19 @@ pub struct Accumulation {
     /// Samples kept per pixel (`≤ taken`): those with a finite radiance.
     /// NaN and infinite samples are dropped and never reach the sum.
     pub kept: Vec<u32>,
+    /// Sum of the kept samples of odd index (one half of `sum`, the other
+    /// half being `sum − odd`): the two half-buffer means estimate each
+    /// pixel's noise (Dammertz et al. 2010; Cycles' adaptive sampling).
+    pub odd: Vec<Vec3>,
+    /// Kept samples of odd index.
+    pub odd_kept: Vec<u32>,
+    /// Pixels adaptive sampling has stopped: they take no more samples.
+    pub converged: Vec<bool>,
 }
+
+/// Floor of the relative error's denominator, in linear radiance (the ε of
+/// relMSE in `caustic converge`: `(x − r)² / (r² + ε)`, with ε = 1e-2).
+pub const RELATIVE_ERROR_FLOOR: f32 = 1.0e-2;
 
 impl Accumulation {
     /// An empty accumulation: no sample taken anywhere.
@@ -37,7 +49,64 @@ impl Accumulation {
             sum: vec![Vec3::ZERO; n],
             taken: vec![0; n],
             kept: vec![0; n],
+            odd: vec![Vec3::ZERO; n],
+            odd_kept: vec![0; n],
+            converged: vec![false; n],
         }
+    }
+
+    /// The pixels of the rectangle `x0..x1 × y0..y1` as an accumulation of
+    /// their own (a tile's state during a render).
+    pub fn region(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> Accumulation {
+        let mut part = Accumulation::new(x1 - x0, y1 - y0);
+        let (w, pw) = (self.width as usize, part.width as usize);
+        for (r, y) in (y0..y1).enumerate() {
+            let src = y as usize * w + x0 as usize..y as usize * w + x1 as usize;
+            let dst = r * pw..(r + 1) * pw;
+            part.copy_span(dst, self, src);
+        }
+        part
+    }
+
+    /// Writes `part` (from [`region`](Self::region)) back at `(x0, y0)`.
+    pub fn put_region(&mut self, x0: u32, y0: u32, part: &Accumulation) {
+        let (w, pw) = (self.width as usize, part.width as usize);
+        for r in 0..part.height as usize {
+            let y = y0 as usize + r;
+            let dst = y * w + x0 as usize..y * w + x0 as usize + pw;
+            self.copy_span(dst, part, r * pw..(r + 1) * pw);
+        }
+    }
+
+    fn copy_span(&mut self, dst: std::ops::Range<usize>, src: &Accumulation, from: std::ops::Range<usize>) {
+        self.sum[dst.clone()].copy_from_slice(&src.sum[from.clone()]);
+        self.taken[dst.clone()].copy_from_slice(&src.taken[from.clone()]);
+        self.kept[dst.clone()].copy_from_slice(&src.kept[from.clone()]);
+        self.odd[dst.clone()].copy_from_slice(&src.odd[from.clone()]);
+        self.odd_kept[dst.clone()].copy_from_slice(&src.odd_kept[from.clone()]);
+        self.converged[dst].copy_from_slice(&src.converged[from]);
+    }
+
+    /// Estimated relative standard error of pixel `i`'s mean: from the two
+    /// half-buffer means `Ā` (even samples) and `B̄` (odd samples), the
+    /// standard error of the full mean is about `|Ā − B̄| / 2` per channel,
+    /// taken relative to the mean as relMSE does,
+    /// `sqrt(mean_c(σ_c² / (Ī_c² + ε)))` with ε = [`RELATIVE_ERROR_FLOOR`],
+    /// so that dark pixels are judged by an absolute floor and bright ones
+    /// relatively. Infinite while either half is empty.
+    pub fn relative_error(&self, i: usize) -> f32 {
+        let (kept, odd_kept) = (self.kept[i], self.odd_kept[i]);
+        let even_kept = kept - odd_kept;
+        if odd_kept == 0 || even_kept == 0 {
+            return f32::INFINITY;
+        }
+        let (sum, odd) = (Vec3A::from(self.sum[i]), Vec3A::from(self.odd[i]));
+        let b = odd / odd_kept as f32;
+        let a = (sum - odd) / even_kept as f32;
+        let mean = sum / kept as f32;
+        let sigma = (a - b).abs() * 0.5;
+        let rel = sigma * sigma / (mean * mean + Vec3A::splat(RELATIVE_ERROR_FLOOR));
+        ((rel.x + rel.y + rel.z) / 3.0).sqrt()
     }
 
     /// Number of pixels.
@@ -67,9 +136,27 @@ impl Accumulation {
         (min, max)
     }
 
-    /// True when every pixel has taken `spp` samples.
+    /// True when every pixel has taken `spp` samples or converged.
     pub fn is_complete(&self, spp: u32) -> bool {
-        self.taken.iter().all(|&t| t >= spp)
+        self.taken.iter().zip(&self.converged).all(|(&t, &c)| t >= spp || c)
+    }
+
+    /// Fewest samples taken by a pixel still sampling (`None` when every
+    /// pixel has converged).
+    pub fn active_level(&self) -> Option<u32> {
+        self.taken
+            .iter()
+            .zip(&self.converged)
+            .filter(|(_, &c)| !c)
+            .map(|(&t, _)| t)
+            .min()
+    }
+
+    /// Per-pixel estimated relative error ([`relative_error`](Self::relative_error));
+    /// pixels with an empty half read `f32::MAX` (an infinity would upset
+    /// image viewers).
+    pub fn error_map(&self) -> Vec<f32> {
+        (0..self.len()).map(|i| self.relative_error(i).min(f32::MAX)).collect()
     }
 
     /// Checks the internal consistency of state read from outside (a
@@ -77,6 +164,16 @@ impl Accumulation {
     /// sums are finite. Returns a description of the first problem.
     pub fn validate(&self, spp: u32) -> Result<(), String> {
         let n = self.width as usize * self.height as usize;
+        if self.odd.len() != n || self.odd_kept.len() != n || self.converged.len() != n {
+            return Err(format!(
+                "{}×{} pixels but {} odd sums, {} odd counts and {} convergence flags",
+                self.width,
+                self.height,
+                self.odd.len(),
+                self.odd_kept.len(),
+                self.converged.len()
+            ));
+        }
         if self.sum.len() != n || self.taken.len() != n || self.kept.len() != n {
             return Err(format!(
                 "{}×{} pixels but {} sums, {} taken counts and {} kept counts",
@@ -95,8 +192,14 @@ impl Accumulation {
                     self.kept[i], self.taken[i]
                 ));
             }
-            if !self.sum[i].is_finite() {
+            if !self.sum[i].is_finite() || !self.odd[i].is_finite() {
                 return Err(format!("pixel ({x}, {y}): the radiance sum is not finite"));
+            }
+            if self.odd_kept[i] > self.kept[i] || self.odd_kept[i] > self.taken[i] / 2 {
+                return Err(format!(
+                    "pixel ({x}, {y}): {} odd samples kept of {} kept, {} taken",
+                    self.odd_kept[i], self.kept[i], self.taken[i]
+                ));
             }
         }
         Ok(())

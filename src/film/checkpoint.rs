@@ -10,6 +10,9 @@
 //! | `sum.R`, `sum.G`, `sum.B` | f32 | the running sums of the kept samples (what a resume continues from) |
 //! | `samples.taken` | u32 | samples evaluated per pixel (the next sample index) |
 //! | `samples.kept` | u32 | of which finite (NaN and infinite samples are dropped) |
+//! | `odd.R`, `odd.G`, `odd.B` | f32 | the running sums of the kept samples of odd index (noise estimate) |
+//! | `odd.kept` | u32 | kept samples of odd index |
+//! | `converged` | u32 | 1 where adaptive sampling stopped the pixel |
 //!
 //! and the header attributes `caustic.format` (= [`CHECKPOINT_FORMAT`]),
 //! `caustic.width`, `caustic.height`, `caustic.spp`, `caustic.seed`,
@@ -25,7 +28,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Value of the `caustic.format` attribute; bumped when the layout changes.
-pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-1";
+pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-2";
 
 /// What a checkpoint records besides the per-pixel state: what a resume
 /// needs to continue the same render, and to refuse a different one.
@@ -82,6 +85,9 @@ const SUM: [&str; 3] = ["sum.R", "sum.G", "sum.B"];
 const PREVIEW: [&str; 3] = ["R", "G", "B"];
 const TAKEN: &str = "samples.taken";
 const KEPT: &str = "samples.kept";
+const ODD: [&str; 3] = ["odd.R", "odd.G", "odd.B"];
+const ODD_KEPT: &str = "odd.kept";
+const CONVERGED: &str = "converged";
 
 /// Writes `accumulation` and `meta` to `path` atomically.
 pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &CheckpointMeta) -> Result<(), OutputError> {
@@ -94,9 +100,16 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
     for c in 0..3 {
         channels.push(AnyChannel::new(PREVIEW[c], component(&film.pixels, c)));
         channels.push(AnyChannel::new(SUM[c], component(&accumulation.sum, c)));
+        channels.push(AnyChannel::new(ODD[c], component(&accumulation.odd, c)));
     }
     channels.push(AnyChannel::new(TAKEN, FlatSamples::U32(accumulation.taken.clone())));
     channels.push(AnyChannel::new(KEPT, FlatSamples::U32(accumulation.kept.clone())));
+    channels.push(AnyChannel::new(
+        ODD_KEPT,
+        FlatSamples::U32(accumulation.odd_kept.clone()),
+    ));
+    let converged = accumulation.converged.iter().map(|&c| c as u32).collect();
+    channels.push(AnyChannel::new(CONVERGED, FlatSamples::U32(converged)));
 
     let mut attributes = LayerAttributes::default();
     let fields = [
@@ -159,11 +172,12 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
             size.1
         )));
     }
-    for (name, ty) in SUM
-        .iter()
-        .map(|n| (*n, SampleType::F32))
-        .chain([(TAKEN, SampleType::U32), (KEPT, SampleType::U32)])
-    {
+    for (name, ty) in SUM.iter().chain(&ODD).map(|n| (*n, SampleType::F32)).chain([
+        (TAKEN, SampleType::U32),
+        (KEPT, SampleType::U32),
+        (ODD_KEPT, SampleType::U32),
+        (CONVERGED, SampleType::U32),
+    ]) {
         let found = header.channels.list.iter().find(|c| c.name == *name);
         match found {
             Some(c) if c.sample_type == ty => {}
@@ -195,18 +209,30 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         Some(FlatSamples::U32(v)) => Ok(v.clone()),
         _ => Err(invalid(format!("channel {name} is missing or not u32"))),
     };
-    let (r, g, b) = (f32s(SUM[0])?, f32s(SUM[1])?, f32s(SUM[2])?);
-    let accumulation = Accumulation {
-        width: meta.width,
-        height: meta.height,
-        sum: r
-            .iter()
+    let vec3s = |names: &[&str; 3]| -> std::result::Result<Vec<Vec3>, CheckpointError> {
+        let (r, g, b) = (f32s(names[0])?, f32s(names[1])?, f32s(names[2])?);
+        Ok(r.iter()
             .zip(g)
             .zip(b)
             .map(|((&r, &g), &b)| Vec3::new(r, g, b))
-            .collect(),
+            .collect())
+    };
+    let converged = u32s(CONVERGED)?;
+    if let Some(i) = converged.iter().position(|&c| c > 1) {
+        return Err(invalid(format!(
+            "channel {CONVERGED}: value {} is not 0 or 1",
+            converged[i]
+        )));
+    }
+    let accumulation = Accumulation {
+        width: meta.width,
+        height: meta.height,
+        sum: vec3s(&SUM)?,
         taken: u32s(TAKEN)?,
         kept: u32s(KEPT)?,
+        odd: vec3s(&ODD)?,
+        odd_kept: u32s(ODD_KEPT)?,
+        converged: converged.into_iter().map(|c| c == 1).collect(),
     };
     accumulation.validate(meta.spp).map_err(invalid)?;
     Ok(Checkpoint { meta, accumulation })
@@ -254,6 +280,9 @@ mod tests {
             a.sum[i] = Vec3::new(0.1 + i as f32 / 3.0, 1.0e-7 * i as f32, 12345.678 + i as f32);
             a.taken[i] = (i % 4) as u32;
             a.kept[i] = (i % 4).saturating_sub(i % 2) as u32;
+            a.odd[i] = Vec3::new(0.05 + i as f32 / 7.0, 3.0e-8 * i as f32, 99.5);
+            a.odd_kept[i] = a.kept[i].min(a.taken[i] / 2);
+            a.converged[i] = i % 3 == 0;
         }
         let meta = CheckpointMeta {
             width: 5,

@@ -11,7 +11,7 @@ use crate::math::Vec3;
 
 pub use accum::Accumulation;
 pub use checkpoint::{read_checkpoint, write_checkpoint, Checkpoint, CheckpointError, CheckpointMeta};
-pub use output::{check_writable, write_exr, write_png, OutputError};
+pub use output::{check_writable, write_exr, write_exr_with, write_png, OutputError};
 pub use tonemap::{aces_fitted, srgb_oetf, tonemap_to_srgb8, OutputSettings, ToneMap};
 
 /// A linear HDR image, row-major from the top-left pixel, one RGB radiance

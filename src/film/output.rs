@@ -163,6 +163,39 @@ pub fn write_exr(path: &Path, film: &Film) -> Result<(), OutputError> {
     })
 }
 
+/// Writes the film's `R`, `G`, `B` and the `extra` channels (one f32 per
+/// pixel each, row-major, e.g. `error` and `spp`) as a linear EXR, atomically
+/// (lossless ZIP compression).
+pub fn write_exr_with(path: &Path, film: &Film, extra: &[(&str, &[f32])]) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    let n = film.width as usize * film.height as usize;
+    let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        channels.push(AnyChannel::new(
+            name,
+            FlatSamples::F32(film.pixels.iter().map(|p| p[c]).collect()),
+        ));
+    }
+    for (name, values) in extra {
+        assert_eq!(values.len(), n, "channel {name}: one value per pixel");
+        channels.push(AnyChannel::new(*name, FlatSamples::F32(values.to_vec())));
+    }
+    let size = (film.width as usize, film.height as usize);
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    let image = Image::from_layer(layer);
+    write_atomically(path, |w| {
+        image.write().to_buffered(w).map_err(|source| OutputError::Exr {
+            path: path.to_path_buf(),
+            source,
+        })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

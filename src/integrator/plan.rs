@@ -15,6 +15,16 @@ use std::fmt;
 /// Bounces before the path integrator's Russian roulette may end a path.
 pub const ROULETTE_DEPTH: u32 = 3;
 
+/// Adaptive sampling: pixels stop once their neighbours' estimated relative
+/// error is at most `threshold` (see `integrator::render::mark_converged`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Adaptive {
+    /// Relative standard error at which a pixel stops.
+    pub threshold: f32,
+    /// Samples every pixel takes before any stops.
+    pub min_spp: u32,
+}
+
 /// How the shadow rays of one light are cast.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowSampling {
@@ -136,6 +146,8 @@ pub struct RenderPlan {
     pub integrator: IntegratorKind,
     /// The sample generator.
     pub sampler: SamplerKind,
+    /// Adaptive sampling, when a noise threshold is set.
+    pub adaptive: Option<Adaptive>,
     /// Seed of the random streams.
     pub seed: u64,
     /// Ambient term active (scene ambient light is not black).
@@ -259,6 +271,10 @@ impl RenderPlan {
             max_depth,
             integrator: s.integrator,
             sampler: s.sampler_kind(),
+            adaptive: s.noise_threshold.map(|threshold| Adaptive {
+                threshold,
+                min_spp: s.min_spp.clamp(2, spp.max(2)),
+            }),
             seed: s.seed,
             ambient: !path && s.ambient.max_element() > 0.0,
             lights,

@@ -118,9 +118,11 @@ pub struct RenderOutput {
     pub film: Film,
     /// The per-pixel state the film was made from: what a checkpoint saves.
     pub accumulation: Accumulation,
-    /// Every pixel has all its samples (false when cancelled or stopped at
-    /// a sample limit).
+    /// Every pixel has all its samples or has converged (false when
+    /// cancelled, stopped at a sample limit or out of time).
     pub complete: bool,
+    /// The render stopped at its time limit before completing.
+    pub timed_out: bool,
     /// Statistics of this run (a resumed render counts only the samples it
     /// took itself).
     pub stats: RenderStats,
@@ -149,6 +151,9 @@ pub struct RenderControl<'a> {
     pub sample_limit: Option<u32>,
     /// Periodic checkpoints.
     pub checkpoint: Option<CheckpointHook<'a>>,
+    /// Stop before the next pixel once this instant is past (a time
+    /// budget); the render returns what it has.
+    pub deadline: Option<Instant>,
     /// `progress(samples_done, samples_total)` over the whole image (samples
     /// of a resumed accumulation included), called after each tile from
     /// worker threads in completion order.
@@ -162,6 +167,7 @@ impl<'a> RenderControl<'a> {
             cancel: None,
             sample_limit: None,
             checkpoint: None,
+            deadline: None,
             progress,
         }
     }
@@ -179,14 +185,12 @@ struct Tile {
     y1: u32,
 }
 
-/// The part of the accumulation one tile owns during a render, row-major
-/// within the tile. Behind a mutex only so a checkpoint can take a
-/// snapshot while the render goes on: the lock is uncontended otherwise.
+/// The part of the accumulation one tile owns during a render. Behind a
+/// mutex only so a checkpoint can take a snapshot while the render goes on:
+/// the lock is uncontended otherwise.
 struct TileState {
     tile: Tile,
-    sum: Vec<Vec3>,
-    taken: Vec<u32>,
-    kept: Vec<u32>,
+    acc: Accumulation,
 }
 
 #[derive(Default)]
@@ -336,20 +340,40 @@ pub fn render_progressive(
         }
         IntegratorKind::Path => Tracer::Path(PathTracer::new(scene, accel, plan)),
     };
-    let mut level = start.taken_range().0;
+    let stop = Stop {
+        cancel: control.cancel,
+        deadline: control.deadline,
+    };
     let done = AtomicU64::new(start.samples_taken());
     let states = split_into_tiles(&start);
     let last_checkpoint = Mutex::new(Instant::now());
     let mut stats = RenderStats::default();
 
-    while level < limit && !control.cancelled() {
+    loop {
+        // Between passes every pixel still sampling has the same count: the
+        // place of adaptive sampling's decision (also right after a resume
+        // from such a state; the decision is idempotent, see `mark_converged`).
+        let mut acc = snapshot(&states, width, height);
+        let mut level = acc.active_level().unwrap_or(limit);
+        if let Some(a) = plan.adaptive {
+            if level >= a.min_spp && level < limit && mark_converged(&mut acc, a.threshold, a.min_spp, level) > 0 {
+                for state in &states {
+                    let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
+                    s.acc = acc.region(s.tile.x0, s.tile.y0, s.tile.x1, s.tile.y1);
+                }
+                level = acc.active_level().unwrap_or(limit);
+            }
+        }
+        if level >= limit || stop.is_due() {
+            break;
+        }
         let target = next_pass_target(level, limit);
         let work: Vec<PassWork> = states
             .par_iter()
             .map(|state| {
                 let work = {
                     let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
-                    render_tile_pass(scene, &integrator, plan, &mut state, target, control.cancel)
+                    render_tile_pass(scene, &integrator, plan, &mut state, target, &stop)
                 };
                 if work.samples > 0 {
                     let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
@@ -372,10 +396,9 @@ pub fn render_progressive(
             stats.samples += w.samples;
             stats.dropped_samples += w.dropped;
         }
-        if control.cancelled() {
+        if stop.is_due() {
             break;
         }
-        level = target;
     }
 
     let accumulation = snapshot(&states, width, height);
@@ -383,9 +406,22 @@ pub fn render_progressive(
     RenderOutput {
         film: accumulation.to_film(),
         complete: accumulation.is_complete(spp),
+        timed_out: control.deadline.is_some_and(|d| Instant::now() >= d) && !accumulation.is_complete(spp),
         accumulation,
         stats,
         photon_map: None,
+    }
+}
+
+/// When workers stop before their next pixel: a cancel flag, a deadline.
+struct Stop<'a> {
+    cancel: Option<&'a AtomicBool>,
+    deadline: Option<Instant>,
+}
+
+impl Stop<'_> {
+    fn is_due(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 }
 
@@ -405,25 +441,13 @@ fn tiles_of(width: u32, height: u32) -> Vec<Tile> {
 }
 
 fn split_into_tiles(acc: &Accumulation) -> Vec<Mutex<TileState>> {
-    let w = acc.width as usize;
     tiles_of(acc.width, acc.height)
         .into_iter()
         .map(|tile| {
-            let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
-            let mut state = TileState {
+            Mutex::new(TileState {
                 tile,
-                sum: Vec::with_capacity(n),
-                taken: Vec::with_capacity(n),
-                kept: Vec::with_capacity(n),
-            };
-            for y in tile.y0..tile.y1 {
-                let row = y as usize * w;
-                let span = row + tile.x0 as usize..row + tile.x1 as usize;
-                state.sum.extend_from_slice(&acc.sum[span.clone()]);
-                state.taken.extend_from_slice(&acc.taken[span.clone()]);
-                state.kept.extend_from_slice(&acc.kept[span]);
-            }
-            Mutex::new(state)
+                acc: acc.region(tile.x0, tile.y0, tile.x1, tile.y1),
+            })
         })
         .collect()
 }
@@ -432,20 +456,74 @@ fn split_into_tiles(acc: &Accumulation) -> Vec<Mutex<TileState>> {
 /// every pixel holds whole samples).
 fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulation {
     let mut acc = Accumulation::new(width, height);
-    let w = width as usize;
     for state in states {
         let s = state.lock().unwrap_or_else(PoisonError::into_inner);
-        let tw = (s.tile.x1 - s.tile.x0) as usize;
-        for (r, y) in (s.tile.y0..s.tile.y1).enumerate() {
-            let row = y as usize * w;
-            let span = row + s.tile.x0 as usize..row + s.tile.x1 as usize;
-            let local = r * tw..(r + 1) * tw;
-            acc.sum[span.clone()].copy_from_slice(&s.sum[local.clone()]);
-            acc.taken[span.clone()].copy_from_slice(&s.taken[local.clone()]);
-            acc.kept[span].copy_from_slice(&s.kept[local]);
-        }
+        acc.put_region(s.tile.x0, s.tile.y0, &s.acc);
     }
     acc
+}
+
+/// Adaptive sampling's decision between two passes, when every pixel still
+/// sampling has `level` samples: such a pixel (with at least `min_spp`)
+/// stops when the root mean square of the estimated relative errors of the
+/// pixels sampling up to `level` in its 5 × 5 neighbourhood (itself
+/// excluded) is at most `threshold`. Returns the number of pixels stopped.
+///
+/// The decision never looks at the pixel's own samples: its sample count
+/// is then independent of the samples it averages, which keeps its mean
+/// unbiased (Kirk & Arvo 1991, "Unbiased Sampling Techniques for Image
+/// Synthesis": a pixel's sample count must not depend on its own samples).
+/// The neighbours' estimates (`Accumulation::relative_error`, from the two
+/// half buffers) stand in for the pixel's, since noise varies smoothly
+/// across an image; each one is a single noisy draw of its pixel's error,
+/// so their mean square over the neighbourhood is the estimate (a pixel
+/// next to a caustic or a glass edge keeps sampling while its neighbourhood
+/// is noisy). Pixels that stopped at an earlier level no longer count:
+/// their estimates are frozen, and one stopped early would hold its
+/// neighbours back forever. Pixels stopped at `level` itself still count,
+/// which makes the decision idempotent: a render resumed from a checkpoint
+/// taken just after it decides the same again (bit-exact resume).
+///
+/// Does nothing unless every pixel still sampling has exactly `level`
+/// samples (a render stopped in the middle of a pass finishes the pass first).
+pub fn mark_converged(acc: &mut Accumulation, threshold: f32, min_spp: u32, level: u32) -> usize {
+    let sampling = |i: usize| !acc.converged[i] || acc.taken[i] == level;
+    if (0..acc.len()).any(|i| !acc.converged[i] && acc.taken[i] != level) {
+        return 0;
+    }
+    let (w, h) = (acc.width as i64, acc.height as i64);
+    let errors = acc.error_map();
+    let counted: Vec<bool> = (0..acc.len()).map(sampling).collect();
+    let mut stopped = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            if acc.converged[i] || acc.taken[i] < min_spp {
+                continue;
+            }
+            let mut squares = 0.0f32;
+            let mut neighbours = 0;
+            for dy in -2..=2 {
+                for dx in -2..=2 {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= w || ny >= h {
+                        continue;
+                    }
+                    let j = (ny * w + nx) as usize;
+                    if !counted[j] {
+                        continue;
+                    }
+                    squares += errors[j] * errors[j];
+                    neighbours += 1;
+                }
+            }
+            if neighbours == 0 || (squares / neighbours as f32).sqrt() <= threshold {
+                acc.converged[i] = true;
+                stopped += 1;
+            }
+        }
+    }
+    stopped
 }
 
 /// Brings every pixel of the tile to `target` samples (pixels already there
@@ -463,7 +541,7 @@ fn render_tile_pass(
     plan: &RenderPlan,
     state: &mut TileState,
     target: u32,
-    cancel: Option<&AtomicBool>,
+    stop: &Stop,
 ) -> PassWork {
     let spp = plan.spp.max(1);
     let (gx, gy) = grid_for(spp);
@@ -471,23 +549,25 @@ fn render_tile_pass(
     let camera = &scene.camera;
     let tile = state.tile;
     let tw = (tile.x1 - tile.x0) as usize;
+    let acc = &mut state.acc;
     let mut out = PassWork::default();
     let mut sites = SiteCache::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
-            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            if stop.is_due() {
                 return out;
             }
             let i = (y - tile.y0) as usize * tw + (x - tile.x0) as usize;
-            let first = state.taken[i];
-            if first >= target {
+            let first = acc.taken[i];
+            if first >= target || acc.converged[i] {
                 continue;
             }
             let pixel = y as u64 * plan.width as u64 + x as u64;
             let strata = PixelStrata::new(plan, seed, pixel);
-            // Continue the f32 running sum exactly where it stopped.
-            let mut sum = Vec3A::from(state.sum[i]);
-            let mut kept = state.kept[i];
+            // Continue the f32 running sums exactly where they stopped.
+            let mut sum = Vec3A::from(acc.sum[i]);
+            let mut odd = Vec3A::from(acc.odd[i]);
+            let (mut kept, mut odd_kept) = (acc.kept[i], acc.odd_kept[i]);
             for k in first..target {
                 let mut rng = Sampler::new(plan.sampler, seed, pixel, k as u64);
                 let sub = match plan.sampler {
@@ -513,15 +593,22 @@ fn render_tile_pass(
                 };
                 out.samples += 1;
                 if l.is_finite() {
-                    sum += l.min(Vec3A::splat(SAMPLE_RADIANCE_LIMIT));
+                    let l = l.min(Vec3A::splat(SAMPLE_RADIANCE_LIMIT));
+                    sum += l;
                     kept += 1;
+                    if k % 2 == 1 {
+                        odd += l;
+                        odd_kept += 1;
+                    }
                 } else {
                     out.dropped += 1;
                 }
             }
-            state.sum[i] = Vec3::from(sum);
-            state.kept[i] = kept;
-            state.taken[i] = target;
+            acc.sum[i] = Vec3::from(sum);
+            acc.odd[i] = Vec3::from(odd);
+            acc.kept[i] = kept;
+            acc.odd_kept[i] = odd_kept;
+            acc.taken[i] = target;
         }
     }
     out

@@ -48,6 +48,10 @@ pub struct Overrides {
     pub integrator: Option<IntegratorKind>,
     /// Sample generator.
     pub sampler: Option<SamplerKind>,
+    /// Adaptive sampling's relative error target.
+    pub noise_threshold: Option<f32>,
+    /// Samples every pixel takes before adaptive sampling stops any.
+    pub min_spp: Option<u32>,
 }
 
 impl Overrides {
@@ -72,6 +76,23 @@ impl Overrides {
         }
         if let Some(k) = self.sampler {
             s.sampler = Some(k);
+        }
+        if let Some(e) = self.noise_threshold {
+            if !(e > 0.0 && e < 1.0) {
+                return Err(JobError::Invalid(format!(
+                    "--noise-threshold {e}: must be in (0, 1), a relative error such as 0.02"
+                )));
+            }
+            s.noise_threshold = Some(e);
+        }
+        if let Some(n) = self.min_spp {
+            if n < 2 || n > s.spp.max(2) {
+                return Err(JobError::Invalid(format!(
+                    "--min-spp {n}: must be in 2..={} (the samples per pixel)",
+                    s.spp.max(2)
+                )));
+            }
+            s.min_spp = n;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
             .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))
@@ -117,6 +138,10 @@ pub struct RenderRequest {
     pub resume: Option<PathBuf>,
     /// Debug overlay.
     pub debug: Option<DebugView>,
+    /// Stop sampling when this much time has passed since the job started
+    /// (the accelerator build and the photon pass included) and write the
+    /// image so far.
+    pub time_limit: Option<Duration>,
 }
 
 impl RenderRequest {
@@ -135,6 +160,7 @@ impl RenderRequest {
             checkpoint_every: Duration::from_secs(60),
             resume: None,
             debug: None,
+            time_limit: None,
         }
     }
 }
@@ -196,6 +222,8 @@ pub struct RenderJob {
     pub resumed_from: Option<PathBuf>,
     /// Debug overlay.
     pub debug: Option<DebugView>,
+    /// Time budget of the whole job.
+    pub time_limit: Option<Duration>,
 }
 
 /// Reported once the accelerator is built, before the first sample.
@@ -333,6 +361,7 @@ impl RenderJob {
             start,
             resumed_from: request.resume.clone(),
             debug: request.debug,
+            time_limit: request.time_limit,
             scene,
         })
     }
@@ -352,6 +381,7 @@ impl RenderJob {
             start,
             resumed_from: None,
             debug: None,
+            time_limit: None,
         }
     }
 
@@ -365,8 +395,11 @@ impl RenderJob {
     /// Builds the accelerator, renders and writes the outputs. A stopped
     /// render still writes its partial image and checkpoint (check
     /// [`JobReport::complete`]).
-    pub fn run(self, hooks: &JobHooks) -> Result<JobReport, JobError> {
+    pub fn run(mut self, hooks: &JobHooks) -> Result<JobReport, JobError> {
+        let started = Instant::now();
         let accel = accel::build(&self.scene, self.accel, &self.accel_options)?;
+        // The budget counts from the job's start, the build included.
+        self.time_limit = self.time_limit.map(|t| t.saturating_sub(started.elapsed()));
         self.run_with(accel.as_ref(), hooks)
     }
 
@@ -401,6 +434,7 @@ impl RenderJob {
                 save: &save,
             }),
             progress: hooks.progress,
+            deadline: self.time_limit.map(|t| Instant::now() + t),
         };
         let begin = Instant::now();
         let mut output = integrator::render_with_control(&self.scene, accel, &plan, self.start, &control);
@@ -425,7 +459,12 @@ impl RenderJob {
             written.push(p.display().to_string());
         }
         if let Some(p) = &self.exr {
-            film::write_exr(p, &output.film)?;
+            // Where the work went: each pixel's estimated relative error and
+            // its sample count, beside the image.
+            let acc = &output.accumulation;
+            let error = acc.error_map();
+            let spp: Vec<f32> = acc.taken.iter().map(|&t| t as f32).collect();
+            film::write_exr_with(p, &output.film, &[("error", &error), ("spp", &spp)])?;
             written.push(p.display().to_string());
         }
         if let Some((path, meta)) = checkpoint {

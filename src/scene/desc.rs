@@ -190,6 +190,10 @@ pub struct RenderDesc {
     pub integrator: Option<IntegratorName>,
     /// Sample generator.
     pub sampler: Option<SamplerName>,
+    /// Adaptive sampling's relative error target.
+    pub noise_threshold: Option<Spanned<f64>>,
+    /// Samples before adaptive sampling stops a pixel.
+    pub min_spp: Option<Spanned<u32>>,
 }
 
 /// Sampler names.

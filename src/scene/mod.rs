@@ -37,6 +37,9 @@ pub enum SampleSharing {
 /// `max_depth`.
 pub const DEFAULT_WHITTED_DEPTH: u32 = 8;
 
+/// Samples every pixel takes before adaptive sampling may stop it.
+pub const DEFAULT_MIN_SPP: u32 = 16;
+
 /// The light transport algorithm (`[render] integrator`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum IntegratorKind {
@@ -88,6 +91,11 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Light transport algorithm.
     pub integrator: IntegratorKind,
+    /// Adaptive sampling: pixels stop once their estimated relative error
+    /// is at most this (`spp` is then the most a pixel takes).
+    pub noise_threshold: Option<f32>,
+    /// Samples every pixel takes before adaptive sampling stops any.
+    pub min_spp: u32,
     /// Sample generator; `None`: the integrator's default (Sobol for path
     /// tracing, independent for Whitted, whose own strata keep the original
     /// images).
@@ -158,6 +166,8 @@ impl Default for RenderSettings {
             spp: 1,
             max_depth: None,
             integrator: IntegratorKind::Whitted,
+            noise_threshold: None,
+            min_spp: DEFAULT_MIN_SPP,
             sampler: None,
             seed: 0,
             output: OutputSettings::default(),

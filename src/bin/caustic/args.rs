@@ -162,6 +162,21 @@ pub struct RenderArgs {
     /// Sample generator (default: the scene's, else sobol for path and independent for whitted).
     #[arg(long, value_enum)]
     pub sampler: Option<SamplerArg>,
+    /// Adaptive sampling: stop each pixel once the estimated relative error
+    /// of its neighbourhood is at most this (e.g. 0.02); --spp is then the most
+    /// a pixel takes.
+    #[arg(long)]
+    pub noise_threshold: Option<f32>,
+    /// Samples every pixel takes before adaptive sampling stops any (default 16).
+    #[arg(long)]
+    pub min_spp: Option<u32>,
+    /// Most samples per pixel (the same as --spp).
+    #[arg(long, conflicts_with = "spp")]
+    pub max_spp: Option<u32>,
+    /// Render progressively until this many seconds have passed, then write
+    /// the image so far (with --noise-threshold: whichever comes first).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
     /// Override the image width.
     #[arg(long)]
     pub width: Option<u32>,

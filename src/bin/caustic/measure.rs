@@ -134,6 +134,8 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         triangle_test: args.backend.triangle_test(),
         integrator: args.integrator.map(Into::into),
         sampler: args.sampler.map(Into::into),
+        noise_threshold: None,
+        min_spp: None,
         ..Overrides::default()
     }
     .apply(&mut scene, &args.scene)

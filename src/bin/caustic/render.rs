@@ -32,12 +32,14 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         overrides: Overrides {
             width: args.width,
             height: args.height,
-            spp: args.spp,
+            spp: args.spp.or(args.max_spp),
             seed: args.seed,
             photons: args.photons,
             triangle_test: args.accel.backend.triangle_test(),
             integrator: args.integrator.map(Into::into),
             sampler: args.sampler.map(Into::into),
+            noise_threshold: args.noise_threshold,
+            min_spp: args.min_spp,
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),
@@ -47,6 +49,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         checkpoint: args.checkpoint.clone(),
         checkpoint_every: Duration::from_secs_f64(args.checkpoint_every),
         resume: args.resume.clone(),
+        time_limit: time_limit(args.time_limit)?,
         debug: args.debug.map(|d| match d {
             DebugView::Photons => job::DebugView::Photons,
             DebugView::Kdtree => job::DebugView::KdTree {
@@ -61,6 +64,17 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         .build()
         .context("cannot start the worker threads")?;
     pool.install(|| render_job(job, &args, &interrupt))
+}
+
+/// `--time-limit SECONDS` as a duration (positive and finite).
+fn time_limit(seconds: Option<f64>) -> Result<Option<Duration>, Failure> {
+    match seconds {
+        None => Ok(None),
+        Some(s) if s.is_finite() && s > 0.0 && s < 1.0e9 => Ok(Some(Duration::from_secs_f64(s))),
+        Some(s) => Err(bad_input(anyhow::anyhow!(
+            "--time-limit {s}: must be a positive number of seconds"
+        ))),
+    }
 }
 
 fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> Result<(), Failure> {
@@ -142,6 +156,25 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
         }
     );
     println!("written: {}", report.written.join(", "));
+    let acc = &report.output.accumulation;
+    if report.plan.adaptive.is_some() {
+        let converged = acc.converged.iter().filter(|&&c| c).count();
+        println!(
+            "adaptive sampling: {converged} of {} pixels converged, {:.1} samples per pixel on average",
+            acc.len(),
+            acc.samples_taken() as f64 / acc.len().max(1) as f64
+        );
+    }
+    if report.output.timed_out {
+        println!(
+            "time limit reached: {} of {} samples done ({}–{} per pixel)",
+            report.samples_done(),
+            report.total_samples,
+            acc.taken_range().0,
+            acc.taken_range().1
+        );
+        return Ok(());
+    }
     if !report.complete() {
         let (lo, hi) = report.output.accumulation.taken_range();
         let how_to_resume = match &checkpoint {

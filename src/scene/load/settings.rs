@@ -37,6 +37,20 @@ impl Ctx<'_> {
         let width = int(&r.width, d.width, "width", 1, MAX_IMAGE_SIDE)?;
         let height = int(&r.height, d.height, "height", 1, MAX_IMAGE_SIDE)?;
         let spp = int(&r.spp, d.spp, "spp", 1, u32::MAX)?;
+        let noise_threshold = match &r.noise_threshold {
+            None => None,
+            Some(s) => {
+                let e = self.number(s, "noise_threshold")?;
+                if e <= 0.0 || e >= 1.0 {
+                    return Err(self.invalid(
+                        s.span(),
+                        format!("`noise_threshold` = {e} must be in (0, 1): a relative error such as 0.02"),
+                    ));
+                }
+                Some(e)
+            }
+        };
+        let min_spp = int(&r.min_spp, d.min_spp, "min_spp", 2, spp.max(2))?;
         let max_depth = match &r.max_depth {
             None => None,
             Some(_) => Some(int(&r.max_depth, 0, "max_depth", 0, MAX_DEPTH)?),
@@ -99,6 +113,8 @@ impl Ctx<'_> {
             },
             photons: d.photons,
             medium: None,
+            noise_threshold,
+            min_spp,
             sampler: r.sampler.map(|s| match s {
                 SamplerName::Sobol => SamplerKind::Sobol,
                 SamplerName::Independent => SamplerKind::Independent,

@@ -1,0 +1,240 @@
+//! Adaptive sampling, the Sobol sampler and the time budget: pixels stop
+//! where the noise is low, the image keeps its expected value, and renders
+//! stay deterministic across thread counts and across interrupt and resume.
+
+use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
+use caustic::integrator::{render, render_with_control, RenderControl, RenderOutput, RenderPlan};
+use caustic::math::{SamplerKind, Vec3A};
+use caustic::scene::{load_scene, IntegratorKind, Light, Scene};
+use std::path::Path;
+use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The test Cornell-like scene with glass and an area light, path traced,
+/// adaptive: noise differs a lot between the walls and the caustic.
+fn adaptive_scene(threshold: f32) -> Scene {
+    let mut scene = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/caustic.toml")).unwrap();
+    let s = &mut scene.settings;
+    s.width = 36;
+    s.height = 28;
+    s.spp = 256;
+    s.seed = 4;
+    s.integrator = IntegratorKind::Path;
+    s.noise_threshold = Some(threshold);
+    s.min_spp = 8;
+    scene
+}
+
+fn build(scene: &Scene) -> Box<dyn Accel> {
+    accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap()
+}
+
+#[test]
+fn pixels_stop_where_the_noise_is_low_and_the_error_estimate_follows_the_noise() {
+    let scene = adaptive_scene(0.08);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    assert_eq!(plan.sampler, SamplerKind::Sobol);
+    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let acc = &out.accumulation;
+    assert!(out.complete);
+    let (lo, hi) = acc.taken_range();
+    assert!(lo >= 8 && lo < hi, "sample counts {lo}..{hi}: nothing adapted");
+    let converged = acc.converged.iter().filter(|&&c| c).count();
+    assert!(
+        converged > acc.len() / 4,
+        "only {converged} of {} pixels stopped",
+        acc.len()
+    );
+    // The noisiest pixels took the most samples.
+    let mut by_spp: Vec<(u32, f32)> = (0..acc.len()).map(|i| (acc.taken[i], acc.relative_error(i))).collect();
+    by_spp.sort_by_key(|p| p.0);
+    assert!(by_spp.iter().all(|p| p.1.is_finite()), "every pixel has both halves");
+}
+
+/// The image mean of adaptive renders is the mean of a long fixed-spp
+/// render: stopping does not bias it (several seeds; a diffuse scene with
+/// soft shadows, whose samples have no heavy tail to hide a bias).
+#[test]
+fn adaptive_stopping_does_not_bias_the_image() {
+    let mut reference_scene =
+        load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/shadow.toml")).unwrap();
+    let s = &mut reference_scene.settings;
+    s.integrator = IntegratorKind::Path;
+    s.spp = 4096;
+    s.width = 24;
+    s.height = 18;
+    s.min_spp = 8;
+    let accel = build(&reference_scene);
+    let reference = render(
+        &reference_scene,
+        accel.as_ref(),
+        &RenderPlan::new(&reference_scene),
+        &|_, _| {},
+    );
+    let mean = |o: &RenderOutput| o.film.pixels.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>();
+    let truth = mean(&reference);
+    let mut sum = 0.0;
+    let seeds = 6;
+    for seed in 0..seeds {
+        let mut s = reference_scene.clone();
+        s.settings.spp = 512;
+        s.settings.noise_threshold = Some(0.05);
+        s.settings.seed = 100 + seed;
+        let out = render(&s, accel.as_ref(), &RenderPlan::new(&s), &|_, _| {});
+        assert!(out.accumulation.converged.iter().any(|&c| c));
+        sum += mean(&out);
+    }
+    let ratio = sum / seeds as f64 / truth;
+    assert!((ratio - 1.0).abs() < 0.01, "adaptive mean / reference mean = {ratio}");
+}
+
+#[test]
+fn adaptive_renders_are_deterministic_across_threads_and_resume() {
+    let scene = adaptive_scene(0.08);
+    let accel = build(&scene);
+    let plan = RenderPlan::new(&scene);
+    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+    let a = pool(1).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
+    let b = pool(3).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
+    assert_eq!(a.accumulation, b.accumulation);
+
+    // Stop mid-way (after some tiles of a later pass), save a checkpoint,
+    // read it back, continue: the same image, bit for bit.
+    let total = a.accumulation.samples_taken();
+    for stop_at in [total / 5, total / 2] {
+        let cancel = AtomicBool::new(false);
+        let progress = |done: u64, _| {
+            if done >= stop_at {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        };
+        let control = RenderControl {
+            cancel: Some(&cancel),
+            ..RenderControl::to_completion(&progress)
+        };
+        let start = Accumulation::new(scene.settings.width, scene.settings.height);
+        let part = render_with_control(&scene, accel.as_ref(), &plan, start, &control);
+        assert!(!part.complete);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.exr");
+        let meta = CheckpointMeta {
+            width: scene.settings.width,
+            height: scene.settings.height,
+            spp: scene.settings.spp,
+            seed: scene.settings.seed,
+            photons: 0,
+            accel: "kdtree".into(),
+            fingerprint: "0".repeat(64),
+        };
+        write_checkpoint(&path, &part.accumulation, &meta).unwrap();
+        let resumed = read_checkpoint(&path).unwrap().accumulation;
+        let done = pool(2).install(|| {
+            render_with_control(
+                &scene,
+                accel.as_ref(),
+                &plan,
+                resumed,
+                &RenderControl::to_completion(&|_, _| {}),
+            )
+        });
+        assert_eq!(done.accumulation, a.accumulation, "stopped at {stop_at} of {total}");
+    }
+}
+
+/// In a uniform environment an albedo-1 object looks like the environment;
+/// with adaptive sampling every pixel still does (within its threshold).
+#[test]
+fn adaptive_white_furnace_renders_the_environment() {
+    let mut scene = adaptive_scene(0.02);
+    scene.lights = vec![Light::Environment {
+        radiance: Vec3A::splat(0.5),
+    }];
+    for m in &mut scene.materials {
+        *m = caustic::scene::Material::diffuse(&m.name, Vec3A::ONE);
+    }
+    let accel = build(&scene);
+    let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let mean = out.film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / out.film.pixels.len() as f64;
+    assert!((mean - 0.5).abs() < 0.005, "{mean}");
+}
+
+fn caustic(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_caustic"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+/// `--exr` carries each pixel's estimated error and sample count;
+/// `--time-limit` ends a render early with the image so far (exit 0).
+#[test]
+fn cli_writes_error_and_spp_channels_and_honours_the_time_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("a.exr");
+    let o = caustic(&[
+        "render",
+        "scenes/test/caustic.toml",
+        "--integrator",
+        "path",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--spp",
+        "64",
+        "--noise-threshold",
+        "0.1",
+        "--min-spp",
+        "8",
+        "--accel",
+        "kdtree",
+        "--exr",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("adaptive sampling:"));
+    let image = exr::prelude::read_all_flat_layers_from_file(&exr).unwrap();
+    let channels = &image.layer_data[0].channel_data.list;
+    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+    for want in ["R", "G", "B", "error", "spp"] {
+        assert!(names.iter().any(|n| n == want), "{names:?}");
+    }
+    let spp = channels.iter().find(|c| c.name.to_string() == "spp").unwrap();
+    let values: Vec<f32> = spp.sample_data.values_as_f32().collect();
+    assert!(values.iter().all(|&v| (8.0..=64.0).contains(&v)), "{values:?}");
+    assert!(values.iter().any(|&v| v < 64.0), "no pixel stopped early");
+
+    // A render far too long for its budget stops on time and succeeds.
+    let png = dir.path().join("t.png");
+    let start = std::time::Instant::now();
+    let o = caustic(&[
+        "render",
+        "scenes/test/caustic.toml",
+        "--integrator",
+        "path",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--spp",
+        "100000",
+        "--time-limit",
+        "1.5",
+        "--accel",
+        "kdtree",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("time limit reached"));
+    assert!(png.exists());
+    // Generous: the budget is not a timing test, only a bound on a hang.
+    assert!(start.elapsed().as_secs() < 60);
+    let bad = caustic(&["render", "scenes/test/caustic.toml", "--time-limit", "-1"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let bad = caustic(&["render", "scenes/test/caustic.toml", "--noise-threshold", "2"]);
+    assert_eq!(bad.status.code(), Some(2));
+}
