@@ -9,7 +9,8 @@ use caustic::integrator::photon::{PhotonMap, SiteCache};
 use caustic::integrator::render::PixelStrata;
 use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
 use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
-use caustic::math::sampling::{grid_for, stratified};
+use caustic::math::rng::mix64;
+use caustic::math::sampling::{grid_for, permute, stratified};
 use caustic::math::{Rng, Sampler, Vec3, Vec3A};
 use caustic::scene::{load_scene, Scene};
 use std::path::Path;
@@ -207,7 +208,8 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
             let (mut sum, mut kept) = (Vec3A::ZERO, 0u32);
             for k in 0..spp {
                 let mut rng = Sampler::independent(Rng::for_pixel(plan.seed, pixel, k as u64));
-                let sub = stratified(k, gx, gy, rng.vec2());
+                let pixel_seed = mix64(plan.seed ^ mix64(pixel)) as u32;
+                let sub = stratified(permute(k, spp, pixel_seed), gx, gy, rng.vec2());
                 let ray = scene
                     .camera
                     .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);

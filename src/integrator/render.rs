@@ -20,7 +20,7 @@ use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
 use crate::film::{Accumulation, Film};
 use crate::math::rng::Domain;
-use crate::math::sampling::{grid_for, stratified};
+use crate::math::sampling::{grid_for, permute, stratified};
 use crate::math::{Rng, Sampler, SamplerKind, Vec3, Vec3A};
 use crate::scene::{IntegratorKind, Scene};
 use rayon::prelude::*;
@@ -564,6 +564,7 @@ fn render_tile_pass(
             }
             let pixel = y as u64 * plan.width as u64 + x as u64;
             let strata = PixelStrata::new(plan, seed, pixel);
+            let pixel_seed = crate::math::rng::mix64(seed ^ crate::math::rng::mix64(pixel)) as u32;
             // Continue the f32 running sums exactly where they stopped.
             let mut sum = Vec3A::from(acc.sum[i]);
             let mut odd = Vec3A::from(acc.odd[i]);
@@ -571,8 +572,10 @@ fn render_tile_pass(
             for k in first..target {
                 let mut rng = Sampler::new(plan.sampler, seed, pixel, k as u64);
                 let sub = match plan.sampler {
-                    // Stratified jittered sub-pixel position (gx × gy = spp).
-                    SamplerKind::Independent => stratified(k, gx, gy, rng.vec2()),
+                    // Stratified jittered sub-pixel position (gx × gy = spp),
+                    // the strata visited in a per-pixel random order: a pixel
+                    // stopped before its last sample is still unbiased.
+                    SamplerKind::Independent => stratified(permute(k, spp, pixel_seed), gx, gy, rng.vec2()),
                     // Sobol points are stratified over the pixel's samples.
                     SamplerKind::Sobol => rng.vec2(),
                 };

@@ -47,6 +47,48 @@ pub fn stratified(index: u32, nx: u32, ny: u32, jitter: Vec2) -> Vec2 {
     Vec2::new((ix as f32 + jitter.x) / nx as f32, (iy as f32 + jitter.y) / ny as f32)
 }
 
+/// A pseudo-random permutation of `0..len` keyed by `seed`: the image of
+/// `index` (Kensler 2013, "Correlated Multi-Jittered Sampling", `permute`;
+/// a cycle-walking hash, bijective on `0..len`). Visiting strata in this
+/// order makes any prefix of a pixel's samples a uniformly random subset of
+/// its strata, so a pixel that stops early (adaptive sampling, a time
+/// limit) is still unbiased.
+pub fn permute(index: u32, len: u32, seed: u32) -> u32 {
+    let l = len.max(1);
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = seed;
+    let mut i = index;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dcb303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e501cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < l {
+            break;
+        }
+    }
+    ((i as u64 + p as u64) % l as u64) as u32
+}
+
 /// Sample `index` of `count` of a stratified sample of the unit cube laid
 /// along the Morton (Z-order) curve: `t = (index + ξ) / count`, with `ξ` the
 /// 64-bit fraction `xi / 2⁶⁴`, is uniform in the sample's stratum of
@@ -127,6 +169,23 @@ pub fn grid_for(n: u32) -> (u32, u32) {
 mod tests {
     use super::*;
     use crate::math::rng::{Domain, Rng};
+
+    #[test]
+    fn permute_is_a_bijection_for_every_length() {
+        for len in [1u32, 2, 3, 7, 16, 20, 33, 1000] {
+            for seed in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, seed);
+                    assert!(j < len && !seen[j as usize], "len {len} seed {seed}: {i} -> {j}");
+                    seen[j as usize] = true;
+                }
+            }
+        }
+        // Different seeds give different orders.
+        let order = |seed| (0..16).map(|i| permute(i, 16, seed)).collect::<Vec<_>>();
+        assert_ne!(order(1), order(2));
+    }
 
     #[test]
     fn compact_every_third_gathers_every_third_bit() {

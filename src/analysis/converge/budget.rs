@@ -24,6 +24,8 @@ pub enum Budget {
     },
     /// A wall-time budget in seconds, resolved by the doubling search.
     Seconds(f64),
+    /// An adaptive render stopped at this noise threshold (`--adaptive`).
+    Threshold(f32),
 }
 
 impl fmt::Display for Budget {
@@ -32,6 +34,7 @@ impl fmt::Display for Budget {
             Budget::Samples { spp, photons: None } => write!(f, "{spp}"),
             Budget::Samples { spp, photons: Some(p) } => write!(f, "{spp}:{p}"),
             Budget::Seconds(s) => write!(f, "{s}s"),
+            Budget::Threshold(e) => write!(f, "noise<{e}"),
         }
     }
 }

@@ -53,7 +53,7 @@ mod run;
 pub use budget::{parse_budgets, Budget, MAX_BUDGETS, MAX_SECONDS_BUDGET};
 pub use metrics::{error_metrics, read_exr, ErrorMetrics, RELMSE_EPSILON};
 pub use report::{csv_text, table_text, write_csv, write_plot, CSV_HEADER};
-pub use run::{pick_within, predict_next, run, ConvergeOptions, CurveSpec, Measurement};
+pub use run::{pick_within, predict_next, run, time_to_error, ConvergeOptions, CurveSpec, Measurement};
 
 use super::plot::PlotError;
 use crate::accel::AccelError;

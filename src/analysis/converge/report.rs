@@ -96,11 +96,15 @@ pub fn write_plot(
             .iter()
             .map(|&name| Series {
                 label: name.to_string(),
-                points: measurements
-                    .iter()
-                    .filter(|m| m.curve == name)
-                    .map(|m| (m.seconds, metric(&m.error)))
-                    .collect(),
+                points: {
+                    let mut p: Vec<(f64, f64)> = measurements
+                        .iter()
+                        .filter(|m| m.curve == name)
+                        .map(|m| (m.seconds, metric(&m.error)))
+                        .collect();
+                    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    p
+                },
             })
             .collect()
     };

@@ -9,27 +9,52 @@ use crate::accel::{self, Accel, AccelKind, AccelOptions};
 use crate::film::Film;
 use crate::integrator::{render, RenderPlan};
 use crate::limits::{check_image_limits, check_photon_count, MAX_SPP};
+use crate::math::SamplerKind;
 use crate::scene::{GatherMode, Scene};
 use std::time::Instant;
 
-/// One curve: an accelerator, and optionally a photon gather mode that
-/// overrides the scene's.
+/// One curve: an accelerator, optionally a photon gather mode and a sampler
+/// that override the scene's, and fixed or adaptive sampling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CurveSpec {
     /// Accelerator.
     pub accel: AccelKind,
     /// Gather mode (`None`: the scene's `[photons] gather`).
     pub gather: Option<GatherMode>,
+    /// Sampler (`None`: the scene's, see `RenderSettings::sampler_kind`).
+    pub sampler: Option<SamplerKind>,
+    /// Adaptive sampling: the curve's points are noise thresholds, not spp.
+    pub adaptive: bool,
 }
 
 impl CurveSpec {
-    /// `"embree"`, or `"embree/direct"` with a gather mode.
-    pub fn name(&self) -> String {
-        match self.gather {
-            None => self.accel.name().to_string(),
-            Some(GatherMode::Direct) => format!("{}/direct", self.accel.name()),
-            Some(GatherMode::Precomputed) => format!("{}/precomputed", self.accel.name()),
+    /// A fixed-spp curve with the scene's gather mode and sampler.
+    pub fn fixed(accel: AccelKind) -> Self {
+        Self {
+            accel,
+            gather: None,
+            sampler: None,
+            adaptive: false,
         }
+    }
+
+    /// `"embree"`, then `/direct` or `/precomputed` with a gather mode,
+    /// `/sobol` or `/independent` with a sampler, `/adaptive` when adaptive.
+    pub fn name(&self) -> String {
+        let mut name = self.accel.name().to_string();
+        match self.gather {
+            None => {}
+            Some(GatherMode::Direct) => name.push_str("/direct"),
+            Some(GatherMode::Precomputed) => name.push_str("/precomputed"),
+        }
+        if let Some(s) = self.sampler {
+            name.push('/');
+            name.push_str(s.name());
+        }
+        if self.adaptive {
+            name.push_str("/adaptive");
+        }
+        name
     }
 
     /// Every accelerator crossed with every gather mode (`gathers` empty:
@@ -38,10 +63,33 @@ impl CurveSpec {
         let mut out = Vec::new();
         for &accel in accels {
             if gathers.is_empty() {
-                out.push(CurveSpec { accel, gather: None });
+                out.push(CurveSpec::fixed(accel));
             }
             for &g in gathers {
-                out.push(CurveSpec { accel, gather: Some(g) });
+                out.push(CurveSpec {
+                    gather: Some(g),
+                    ..CurveSpec::fixed(accel)
+                });
+            }
+        }
+        out
+    }
+
+    /// These curves crossed with every sampler (`samplers` empty: as they
+    /// are), each also as an adaptive curve when `adaptive`.
+    pub fn with_samplers(curves: &[CurveSpec], samplers: &[SamplerKind], adaptive: bool) -> Vec<CurveSpec> {
+        let mut out = Vec::new();
+        for c in curves {
+            let sampled: Vec<CurveSpec> = if samplers.is_empty() {
+                vec![*c]
+            } else {
+                samplers.iter().map(|&s| CurveSpec { sampler: Some(s), ..*c }).collect()
+            };
+            for s in sampled {
+                out.push(s);
+                if adaptive {
+                    out.push(CurveSpec { adaptive: true, ..s });
+                }
             }
         }
         out
@@ -62,6 +110,12 @@ pub struct ConvergeOptions {
     pub epsilon: f64,
     /// Accelerator build options.
     pub accel: AccelOptions,
+    /// Noise thresholds of the adaptive curves (their budgets).
+    pub thresholds: Vec<f32>,
+    /// Most samples per pixel of an adaptive render.
+    pub max_spp: u32,
+    /// Search each curve for the time at which its relMSE reaches this.
+    pub target_relmse: Option<f64>,
 }
 
 /// One render of a convergence run.
@@ -138,26 +192,39 @@ impl Renderer<'_> {
         }
     }
 
-    /// Sets the scene to `curve`'s gather mode, `spp` and `photons`; its plan.
-    fn configure(&mut self, curve: &CurveSpec, spp: u32, photons: u64) -> RenderPlan {
+    /// Sets the scene to `curve`'s gather mode and sampler, `spp`,
+    /// `photons` and the noise threshold (adaptive curves); its plan.
+    fn configure(&mut self, curve: &CurveSpec, spp: u32, photons: u64, threshold: Option<f32>) -> RenderPlan {
         let s = &mut self.scene.settings;
         s.spp = spp;
         s.photons.count = photons;
         if let Some(g) = curve.gather {
             s.photons.gather = g;
         }
+        if let Some(k) = curve.sampler {
+            s.sampler = Some(k);
+        }
+        s.noise_threshold = threshold;
+        s.min_spp = s.min_spp.min(spp).max(2);
         RenderPlan::new(&self.scene)
     }
 
     /// One untimed render at 1 spp and at most [`WARM_UP_PHOTONS`] photons.
     fn warm_up(&mut self, accel: &dyn Accel, curve: &CurveSpec) {
         let photons = self.default_photons(1).min(WARM_UP_PHOTONS);
-        let plan = self.configure(curve, 1, photons);
+        let plan = self.configure(curve, 1, photons, None);
         render::render(&self.scene, accel, &plan, &|_, _| {});
     }
 
-    fn render(&mut self, accel: &dyn Accel, curve: &CurveSpec, spp: u32, photons: u64) -> Result<Run, ConvergeError> {
-        let plan = self.configure(curve, spp, photons);
+    fn render(
+        &mut self,
+        accel: &dyn Accel,
+        curve: &CurveSpec,
+        spp: u32,
+        photons: u64,
+        threshold: Option<f32>,
+    ) -> Result<Run, ConvergeError> {
+        let plan = self.configure(curve, spp, photons, threshold);
         let start = Instant::now();
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         let mut seconds = start.elapsed().as_secs_f64();
@@ -174,6 +241,11 @@ impl Renderer<'_> {
             seconds = seconds.min(again.elapsed().as_secs_f64());
         }
         let error = error_metrics(&out.film, self.reference, self.epsilon)?;
+        // An adaptive render reports the mean samples per pixel it took.
+        let spp = match threshold {
+            None => spp,
+            Some(_) => (out.accumulation.samples_taken() as f64 / out.accumulation.len().max(1) as f64).round() as u32,
+        };
         Ok(Run {
             spp,
             photons: if plan.runs_photons() { photons } else { 0 },
@@ -295,9 +367,12 @@ pub fn run(
             continue;
         };
         for (ci, curve) in options.curves.iter().enumerate() {
+            if curve.adaptive {
+                continue;
+            }
             let (a, build) = accel_of(curve.accel);
             let p = photons.unwrap_or_else(|| renderer.default_photons(spp));
-            let r = renderer.render(a, curve, spp, p)?;
+            let r = renderer.render(a, curve, spp, p, None)?;
             log(&describe(curve, &format!("budget {budget}"), &r));
             results[ci][bi] = Some(measurement(curve, *budget, &r, build, true));
         }
@@ -314,6 +389,9 @@ pub fn run(
         .fold(None, |m: Option<f64>, s| Some(m.map_or(s, |m| m.max(s))));
     if let Some(max_seconds) = max_seconds {
         for (ci, curve) in options.curves.iter().enumerate() {
+            if curve.adaptive {
+                continue;
+            }
             let (a, build) = accel_of(curve.accel);
             let mut ladder: Vec<Run> = Vec::new();
             let mut spp = 1u32;
@@ -332,7 +410,7 @@ pub fn run(
                     ));
                     break;
                 }
-                let r = renderer.render(a, curve, spp, photons)?;
+                let r = renderer.render(a, curve, spp, photons, None)?;
                 log(&describe(curve, &format!("search ≤{max_seconds}s"), &r));
                 ladder.push(r);
                 let times: Vec<f64> = ladder.iter().map(|r| r.seconds).collect();
@@ -350,7 +428,94 @@ pub fn run(
             }
         }
     }
-    Ok(results.into_iter().flatten().flatten().collect())
+    let mut out: Vec<Measurement> = results.into_iter().flatten().flatten().collect();
+
+    // Adaptive curves: one render per noise threshold, at most `max_spp`.
+    let max_spp = options.max_spp.max(2);
+    for curve in options.curves.iter().filter(|c| c.adaptive) {
+        let (a, build) = accel_of(curve.accel);
+        for &t in &options.thresholds {
+            let photons = renderer.default_photons(max_spp);
+            let r = renderer.render(a, curve, max_spp, photons, Some(t))?;
+            log(&describe(curve, &format!("noise<{t}"), &r));
+            out.push(measurement(curve, Budget::Threshold(t), &r, build, true));
+        }
+    }
+
+    // Time to a target error: each curve goes on (doubling spp, or halving
+    // the threshold) until its relMSE is at or below the target.
+    if let Some(target) = options.target_relmse {
+        for curve in &options.curves {
+            let (a, build) = accel_of(curve.accel);
+            let reached = |out: &[Measurement]| out.iter().any(|m| m.curve == curve.name() && m.error.relmse <= target);
+            let mut step = 0;
+            while !reached(&out) {
+                let (budget, r) = if curve.adaptive {
+                    let t = 0.5f32.powi(step + 1);
+                    if t < 1.0e-4 {
+                        break;
+                    }
+                    let photons = renderer.default_photons(max_spp);
+                    (
+                        Budget::Threshold(t),
+                        renderer.render(a, curve, max_spp, photons, Some(t))?,
+                    )
+                } else {
+                    let spp = 1u32 << step;
+                    let photons = renderer.default_photons(spp);
+                    if spp > MAX_SPP || check_budget(st.width, st.height, spp, photons).is_err() {
+                        break;
+                    }
+                    (
+                        Budget::Samples { spp, photons: None },
+                        renderer.render(a, curve, spp, photons, None)?,
+                    )
+                };
+                log(&describe(curve, &format!("to relMSE {target:e}"), &r));
+                out.push(measurement(curve, budget, &r, build, true));
+                step += 1;
+                if step > 30 {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The time at which each curve's relMSE reaches `target`: interpolated
+/// log-log between the two renders of the curve that bracket it (ordered by
+/// time); `None` when no render reached it.
+pub fn time_to_error(measurements: &[Measurement], target: f64) -> Vec<(String, Option<f64>)> {
+    let mut names: Vec<&str> = Vec::new();
+    for m in measurements {
+        if !names.contains(&m.curve.as_str()) {
+            names.push(&m.curve);
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let mut points: Vec<(f64, f64)> = measurements
+                .iter()
+                .filter(|m| m.curve == name && m.seconds > 0.0 && m.error.relmse > 0.0)
+                .map(|m| (m.seconds, m.error.relmse))
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let crossing = points.iter().position(|p| p.1 <= target).map(|i| {
+                if i == 0 {
+                    return points[0].0;
+                }
+                let ((t0, e0), (t1, e1)) = (points[i - 1], points[i]);
+                if e0 <= e1 {
+                    return t1;
+                }
+                let f = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
+                (t0.ln() + f * (t1.ln() - t0.ln())).exp()
+            });
+            (name.to_string(), crossing)
+        })
+        .collect()
 }
 
 #[cfg(test)]

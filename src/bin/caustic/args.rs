@@ -294,6 +294,25 @@ pub struct ConvergeArgs {
     /// default: the scene's mode only).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub gather: Vec<GatherArg>,
+    /// Samplers to compare (one curve per accelerator and sampler; default:
+    /// the scene's only).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub samplers: Vec<SamplerArg>,
+    /// Also render adaptive curves, one render per noise threshold
+    /// (e.g. 0.2,0.1,0.05), each at most --max-spp.
+    #[arg(long, value_delimiter = ',')]
+    pub adaptive: Vec<f32>,
+    /// Add adaptive curves searched by --target-relmse alone (thresholds
+    /// halved from 0.5 until the target is met).
+    #[arg(long)]
+    pub adaptive_search: bool,
+    /// Most samples per pixel of an adaptive render.
+    #[arg(long)]
+    pub max_spp: Option<u32>,
+    /// For every curve, render on (spp doubled, threshold halved) until
+    /// relMSE is at most this, and report the time it took (interpolated).
+    #[arg(long)]
+    pub target_relmse: Option<f64>,
     /// Photons per spp for budgets that give no photon count.
     #[arg(long)]
     pub photons_per_spp: Option<u64>,

@@ -8,6 +8,7 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film;
 use caustic::integrator::RenderPlan;
 use caustic::job::Overrides;
+use caustic::math::SamplerKind;
 use caustic::scene::{self, IntegratorKind};
 use std::time::Instant;
 
@@ -153,12 +154,37 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
             GatherArg::Precomputed => scene::GatherMode::Precomputed,
         })
         .collect();
+    let samplers: Vec<SamplerKind> = args.samplers.iter().map(|&s| s.into()).collect();
+    for &t in &args.adaptive {
+        if !(t > 0.0 && t < 1.0) {
+            return Err(bad_input(anyhow::anyhow!(
+                "--adaptive {t}: noise thresholds must be in (0, 1)"
+            )));
+        }
+    }
+    if let Some(t) = args.target_relmse {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(bad_input(anyhow::anyhow!(
+                "--target-relmse {t}: must be a positive number"
+            )));
+        }
+    }
+    let max_spp = args.max_spp.unwrap_or(1024);
+    caustic::limits::check_image_limits(scene.settings.width, scene.settings.height, max_spp)
+        .map_err(|e| bad_input(anyhow::anyhow!("--max-spp {max_spp}: {e}")))?;
     let options = ConvergeOptions {
         budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
-        curves: CurveSpec::cross(&accels, &gathers),
+        curves: CurveSpec::with_samplers(
+            &CurveSpec::cross(&accels, &gathers),
+            &samplers,
+            !args.adaptive.is_empty() || args.adaptive_search,
+        ),
         photons_per_spp: args.photons_per_spp,
         epsilon: args.epsilon,
         accel: args.backend.options(&scene),
+        thresholds: args.adaptive.clone(),
+        max_spp,
+        target_relmse: args.target_relmse,
     };
     let plot_size = args
         .plot_size
@@ -195,6 +221,15 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
             other => bad_input(other),
         })?;
     print!("{}", converge::table_text(&results, options.epsilon));
+    if let Some(target) = options.target_relmse {
+        println!("time to relMSE {target:e}:");
+        for (curve, seconds) in converge::time_to_error(&results, target) {
+            match seconds {
+                Some(s) => println!("  {curve:<28} {s:.3} s"),
+                None => println!("  {curve:<28} not reached"),
+            }
+        }
+    }
     if let Some(p) = &args.csv {
         converge::write_csv(p, &results).map_err(bad_input)?;
         println!("written: {}", p.display());
