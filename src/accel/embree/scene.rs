@@ -62,6 +62,13 @@ impl Geometry {
     /// dragon: 5.2 MB, a few ms) against a BVH several times that size.
     /// Indices need no padding and are shared in place; the mesh is kept
     /// alive by the geometry and then by the scene it is attached to.
+    ///
+    /// Triangles of exactly zero area (collinear corners, in f64) are left
+    /// out of the build: robust traversal reports hits on some of them, and
+    /// such a hit has no normal. Their indices point at one extra vertex of
+    /// non-finite coordinates, which Embree's build skips (it drops every
+    /// primitive with a non-finite vertex), so primitive IDs stay the mesh's
+    /// triangle indices.
     pub fn triangles(device: &Device, mesh: &Arc<Mesh>, quality: sys::RTCBuildQuality) -> Result<Self, AccelError> {
         let name = &mesh.name;
         let vertex_count = mesh.positions.len();
@@ -71,9 +78,12 @@ impl Geometry {
                 "mesh {name}: {tri_count} triangles / {vertex_count} vertices exceed Embree's 32-bit indices"
             )));
         }
+        let degenerate = zero_area_triangles(mesh);
+        // One extra vertex, never finite, for the zero-area triangles.
+        let buffer_vertices = vertex_count + usize::from(!degenerate.is_empty());
         let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_TRIANGLE)?;
-        // SAFETY: live geometry; Embree allocates `vertex_count` items of 12
-        // bytes (plus its padding) and returns a pointer valid until release.
+        // SAFETY: live geometry; Embree allocates `buffer_vertices` items of
+        // 12 bytes (plus its padding) and returns a pointer valid until release.
         let dst = unsafe {
             sys::rtcSetNewGeometryBuffer(
                 geometry.raw,
@@ -81,33 +91,65 @@ impl Geometry {
                 0,
                 sys::RTC_FORMAT_FLOAT3,
                 12,
-                vertex_count,
+                buffer_vertices,
             )
         } as *mut f32;
         device.check(&format!("vertex buffer of mesh {name}"))?;
         if dst.is_null() {
             return Err(AccelError::Embree(format!("no vertex buffer for mesh {name}")));
         }
-        // SAFETY: `dst` holds `3 * vertex_count` floats (checked non-null),
+        // SAFETY: `dst` holds `3 * buffer_vertices` floats (checked non-null),
         // and `Vec3` is three packed f32 (glam's `#[repr(C)]` Vec3).
         unsafe {
             std::ptr::copy_nonoverlapping(mesh.positions.as_ptr() as *const f32, dst, 3 * vertex_count);
+            if buffer_vertices > vertex_count {
+                std::ptr::copy_nonoverlapping([f32::NAN; 3].as_ptr(), dst.add(3 * vertex_count), 3);
+            }
         }
-        // SAFETY: `[u32; 3]` items, stride 12, `tri_count` of them; the mesh is
-        // kept alive (below) for as long as Embree can read the buffer.
-        unsafe {
-            sys::rtcSetSharedGeometryBuffer(
-                geometry.raw,
-                sys::RTC_BUFFER_TYPE_INDEX,
-                0,
-                sys::RTC_FORMAT_UINT3,
-                mesh.triangles.as_ptr() as *const c_void,
-                0,
-                12,
-                tri_count,
-            );
-            sys::rtcSetGeometryBuildQuality(geometry.raw, quality);
+        if degenerate.is_empty() {
+            // SAFETY: `[u32; 3]` items, stride 12, `tri_count` of them; the mesh
+            // is kept alive (below) for as long as Embree can read the buffer.
+            unsafe {
+                sys::rtcSetSharedGeometryBuffer(
+                    geometry.raw,
+                    sys::RTC_BUFFER_TYPE_INDEX,
+                    0,
+                    sys::RTC_FORMAT_UINT3,
+                    mesh.triangles.as_ptr() as *const c_void,
+                    0,
+                    12,
+                    tri_count,
+                );
+            }
+        } else {
+            // SAFETY: live geometry; Embree allocates `tri_count` items of 12
+            // bytes and returns a pointer valid until release.
+            let dst = unsafe {
+                sys::rtcSetNewGeometryBuffer(
+                    geometry.raw,
+                    sys::RTC_BUFFER_TYPE_INDEX,
+                    0,
+                    sys::RTC_FORMAT_UINT3,
+                    12,
+                    tri_count,
+                )
+            } as *mut [u32; 3];
+            device.check(&format!("index buffer of mesh {name}"))?;
+            if dst.is_null() {
+                return Err(AccelError::Embree(format!("no index buffer for mesh {name}")));
+            }
+            let nan = vertex_count as u32;
+            // SAFETY: `dst` holds `tri_count` items of `[u32; 3]` (checked
+            // non-null); every index written is below `buffer_vertices`.
+            unsafe {
+                std::ptr::copy_nonoverlapping(mesh.triangles.as_ptr(), dst, tri_count);
+                for &t in &degenerate {
+                    *dst.add(t as usize) = [nan; 3];
+                }
+            }
         }
+        // SAFETY: live geometry; the quality is one of the sys constants.
+        unsafe { sys::rtcSetGeometryBuildQuality(geometry.raw, quality) };
         geometry.keep.push(KeepAlive::Mesh(mesh.clone()));
         geometry.commit(&format!("triangle geometry of mesh {name}"))?;
         Ok(geometry)
@@ -252,6 +294,18 @@ impl Scene {
 /// A committed (immutable, queryable) scene.
 pub struct CommittedScene {
     pub(super) inner: Arc<SceneHandle>,
+}
+
+/// Indices of the triangles of `mesh` whose area is exactly zero: corners
+/// collinear in f64 (products of f32 values are exact there).
+fn zero_area_triangles(mesh: &Mesh) -> Vec<u32> {
+    (0..mesh.triangles.len())
+        .filter(|&i| {
+            let [a, b, c] = mesh.corners(i).map(|v| v.as_dvec3());
+            (b - a).cross(c - a) == glam::DVec3::ZERO
+        })
+        .map(|i| i as u32)
+        .collect()
 }
 
 #[cfg(test)]
