@@ -140,6 +140,15 @@ impl Lobe {
         }
     }
 
+    /// Probability that [`Lobe::sample`] returns a delta direction.
+    fn delta_probability(&self, wo: Vec3A) -> f32 {
+        match self {
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 1.0,
+            Lobe::Plastic(p) => p.delta_probability(wo),
+            _ => 0.0,
+        }
+    }
+
     /// Has a lobe that is not a delta (worth sampling lights for).
     fn is_smooth_only(&self) -> bool {
         matches!(
@@ -262,6 +271,26 @@ impl Bsdf {
     /// Only delta lobes (mirror, smooth glass or metal).
     pub fn is_delta(&self) -> bool {
         !self.is_black() && !self.has_smooth_lobe()
+    }
+
+    /// Probability that [`sample`](Self::sample) returns a delta direction
+    /// from `wo` (the photon tracer stores a photon when it does not, and
+    /// divides its power by the complement).
+    pub fn delta_probability(&self, wo: Vec3A) -> f32 {
+        let total = self.total_weight();
+        if total <= 0.0 {
+            return 0.0;
+        }
+        let wo = if self.two_sided && wo.z < 0.0 {
+            Vec3A::new(wo.x, wo.y, -wo.z)
+        } else {
+            wo
+        };
+        self.lobes()
+            .iter()
+            .map(|(l, w)| w / total * l.delta_probability(wo))
+            .sum::<f32>()
+            .min(1.0)
     }
 
     /// Reflection-only materials are seen the same from both sides.

@@ -37,6 +37,15 @@ impl Plastic {
         }
     }
 
+    /// Probability that [`sample`](Self::sample) picks the coating's
+    /// reflection from `wo`.
+    pub(super) fn delta_probability(&self, wo: Vec3A) -> f32 {
+        if wo.z <= 0.0 {
+            return 0.0;
+        }
+        self.specular_probability(fresnel::dielectric(wo.z, self.eta).0)
+    }
+
     fn base(&self) -> Vec3A {
         self.kd / (1.0 - fresnel::diffuse_reflectance(1.0 / self.eta))
     }

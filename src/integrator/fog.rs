@@ -58,6 +58,14 @@ mod tests {
             density: 0.5,
             colour: Vec3A::new(0.0, 0.2, 0.4),
             region: Aabb::new(Vec3A::new(-1.0, -1.0, -1.0), Vec3A::new(1.0, 0.0, 1.0)),
+            volume: None,
+            surface: crate::geometry::WaterSurface {
+                center: Vec3A::ZERO,
+                size: crate::math::Vec2::new(2.0, 2.0),
+                resolution: (1, 1),
+                waves: vec![],
+            },
+            boundary: 0,
         }
     }
 

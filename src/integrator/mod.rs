@@ -6,6 +6,7 @@ pub mod debug;
 pub mod fog;
 pub mod lights;
 pub mod lint;
+pub mod medium;
 pub mod path;
 pub mod photon;
 pub mod plan;

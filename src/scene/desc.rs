@@ -75,11 +75,17 @@ pub enum GatherName {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MediumDesc {
-    /// Extinction per unit length.
+    /// Extinction per unit length of the fog.
     pub density: Spanned<f64>,
     /// Fog colour (`color` is accepted too).
     #[serde(alias = "color")]
     pub colour: Option<Spanned<Vec3Desc>>,
+    /// Absorption coefficient per channel (path tracing).
+    pub absorption: Option<Spanned<Vec3Desc>>,
+    /// Scattering coefficient per channel (path tracing).
+    pub scattering: Option<Spanned<Vec3Desc>>,
+    /// Henyey–Greenstein asymmetry (path tracing).
+    pub g: Option<Spanned<f64>>,
 }
 
 /// One wave of a water surface (`waves = [{ … }, …]`).

@@ -68,11 +68,16 @@ pub struct Caster {
 /// The bounding spheres of the objects whose material is specular (mirror
 /// or dielectric): exact for spheres, the box's circumscribed sphere else.
 pub fn specular_casters(scene: &Scene) -> Vec<Caster> {
+    casters_where(scene, |m| m.is_specular())
+}
+
+/// The bounding spheres of the objects whose material passes `keep`.
+pub fn casters_where(scene: &Scene, keep: impl Fn(&crate::scene::Material) -> bool) -> Vec<Caster> {
     scene
         .objects
         .iter()
         .enumerate()
-        .filter(|(_, o)| scene.materials[o.material as usize].is_specular())
+        .filter(|(_, o)| keep(&scene.materials[o.material as usize]))
         .map(|(i, o)| match &o.shape {
             Shape::Sphere(s) => Caster {
                 center: s.center,
@@ -118,10 +123,10 @@ pub struct PhotonTracer<'a> {
 pub struct PhotonPath {
     /// Emission index (orders the stored photons).
     pub index: u64,
-    rng: Rng,
-    ray: Ray,
-    power: Vec3A,
-    bounces: u32,
+    pub(super) rng: Rng,
+    pub(super) ray: Ray,
+    pub(super) power: Vec3A,
+    pub(super) bounces: u32,
 }
 
 impl PhotonPath {
@@ -149,7 +154,11 @@ const WAVEFRONT: usize = 256;
 impl<'a> PhotonTracer<'a> {
     /// Prepares emission of `count` photons in total.
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel, count: u64) -> Self {
-        let casters = specular_casters(scene);
+        Self::with_casters(scene, accel, count, specular_casters(scene))
+    }
+
+    /// Like [`new`](Self::new), with emission restricted to `casters`.
+    pub fn with_casters(scene: &'a Scene, accel: &'a dyn Accel, count: u64, casters: Vec<Caster>) -> Self {
         let mut emitters: Vec<Emitter> = scene
             .lights
             .iter()

@@ -162,7 +162,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         objects,
     };
     if let Some(m) = &desc.medium {
-        scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(_, w)| w), scene.bounds())?);
+        scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(i, w)| (*i, w)), scene.bounds())?);
     }
     Ok(scene)
 }

@@ -8,6 +8,7 @@ use crate::geometry::water::{WaterSurface, Wave, MAX_WATER_RESOLUTION};
 use crate::io::MeshError;
 use crate::math::{Transform, Vec3, Vec3A};
 use crate::scene::desc::{MediumDesc, ObjectDesc, ScaleDesc, Spanned, Vec2Desc};
+use crate::scene::medium::VolumeCoefficients;
 use crate::scene::{Medium, Mesh, Object, Quad, Shape, Sphere};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -46,7 +47,7 @@ impl Ctx<'_> {
     pub(super) fn medium(
         &self,
         m: &Spanned<MediumDesc>,
-        water: Option<&WaterSurface>,
+        water: Option<(usize, &WaterSurface)>,
         bounds: crate::math::Aabb,
     ) -> Result<Medium, SceneError> {
         let d = m.get_ref();
@@ -58,16 +59,57 @@ impl Ctx<'_> {
             None => Vec3A::ZERO,
             Some(c) => self.colour(c, "colour")?,
         };
-        let Some(water) = water else {
+        let Some((boundary, water)) = water else {
             return Err(self.invalid(
                 m.span(),
                 "`[medium]` fills the water: the scene needs an object of `type = \"water\"`",
             ));
         };
+        let coefficient =
+            |c: &Option<Spanned<crate::scene::desc::Vec3Desc>>, key: &str| -> Result<Option<Vec3A>, SceneError> {
+                match c {
+                    None => Ok(None),
+                    Some(s) => {
+                        let v = self.vec3(s, key)?;
+                        if v.min_element() < 0.0 {
+                            return Err(self.invalid(s.span(), format!("`{key}` must be ≥ 0 in every channel")));
+                        }
+                        Ok(Some(v))
+                    }
+                }
+            };
+        let absorption = coefficient(&d.absorption, "absorption")?;
+        let scattering = coefficient(&d.scattering, "scattering")?;
+        let g = match &d.g {
+            None => 0.0,
+            Some(s) => {
+                let g = self.number(s, "g")?;
+                if g <= -1.0 || g >= 1.0 {
+                    return Err(self.invalid(s.span(), format!("`g` = {g} must be in (−1, 1)")));
+                }
+                g
+            }
+        };
+        let volume = match (absorption, scattering) {
+            (None, None) => {
+                if let Some(s) = &d.g {
+                    return Err(self.invalid(s.span(), "`g` needs `absorption` and `scattering`"));
+                }
+                None
+            }
+            (a, s) => Some(VolumeCoefficients {
+                absorption: a.unwrap_or(Vec3A::ZERO),
+                scattering: s.unwrap_or(Vec3A::ZERO),
+                g,
+            }),
+        };
         Ok(Medium {
             density,
             colour,
             region: water.volume(bounds.min.y),
+            volume,
+            surface: water.clone(),
+            boundary: boundary as u32,
         })
     }
 
