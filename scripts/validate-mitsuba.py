@@ -67,6 +67,11 @@ def cornell(size, boxes=True):
     d["sensor"]["film"]["height"] = size
     d["sensor"]["film"]["rfilter"] = {"type": "box"}
     d["integrator"] = {"type": "path", "max_depth": -1}
+    # caustic's area lights are emitters only: black, opaque, reflecting
+    # nothing. Mitsuba's box gives its light the white diffuse BSDF, which
+    # would reflect the room's light back down (about 1 % of the image).
+    d["black"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    d["light"]["bsdf"] = {"type": "ref", "id": "black"}
     if not boxes:
         del d["small-box"]
         del d["large-box"]

@@ -187,19 +187,26 @@ impl LightSampler {
         }
     }
 
-    /// The area lights whose emitting side `ray` meets before `t_max`
-    /// (lights are not scene objects: they never block anything).
-    pub fn hits<'s>(&'s self, ray: &'s Ray, t_max: f32) -> impl Iterator<Item = EmitterHit> + 's {
-        self.emitters.iter().enumerate().filter_map(move |(i, e)| match e {
-            Emitter::Area { light, quad } if ray.dir.dot(light.normal) < 0.0 => {
-                quad.intersect(ray, t_max).map(|(t, _, _)| EmitterHit {
-                    light: i,
-                    t,
-                    radiance: light.radiance,
-                })
+    /// The nearest area light that `ray` meets before `t_max`, from either
+    /// side (path tracing treats area lights as opaque surfaces that absorb
+    /// what reaches them); the radiance is zero on the side that does not
+    /// emit.
+    pub fn nearest_hit(&self, ray: &Ray, t_max: f32) -> Option<EmitterHit> {
+        let mut nearest: Option<EmitterHit> = None;
+        for (i, e) in self.emitters.iter().enumerate() {
+            if let Emitter::Area { light, quad } = e {
+                let limit = nearest.map_or(t_max, |n| n.t);
+                if let Some((t, _, _)) = quad.intersect(ray, limit) {
+                    let front = ray.dir.dot(light.normal) < 0.0;
+                    nearest = Some(EmitterHit {
+                        light: i,
+                        t,
+                        radiance: if front { light.radiance } else { Vec3A::ZERO },
+                    });
+                }
             }
-            _ => None,
-        })
+        }
+        nearest
     }
 
     /// Density in solid angle with which [`sample`](Self::sample) picks the

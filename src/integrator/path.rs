@@ -8,10 +8,12 @@
 //! (pbrt-v4 §13.1.1, survival `min(1, max βᵢ)` with the refraction scaling
 //! taken out); `max_depth`, when set, caps the bounces.
 //!
-//! Conventions shared with the Whitted integrator: lights are not scene
-//! objects (area lights are one-sided rectangles that emit toward the
-//! camera and BSDF rays, and never block a ray); spawned rays start at
-//! `offset_ray_origin`; shadow rays stop `SHADOW_EPSILON` short of the light.
+//! Area lights are one-sided emitting rectangles and, unlike in the Whitted
+//! integrator, opaque black surfaces: a path ends where it meets one, and
+//! they cast shadows (a ceiling light hung just below the ceiling shades
+//! the ceiling above it, as in other physically based renderers). Spawned
+//! rays start at `offset_ray_origin`; shadow rays stop `SHADOW_EPSILON`
+//! short of the light.
 
 use super::lights::LightSampler;
 use super::plan::{RenderPlan, ROULETTE_DEPTH};
@@ -69,13 +71,16 @@ impl<'a> PathTracer<'a> {
         loop {
             let hit = self.accel.intersect(&ray, f32::INFINITY);
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
-            for e in self.lights.hits(&ray, t_hit) {
-                let w = if specular {
-                    1.0
-                } else {
-                    power_heuristic(bsdf_pdf, self.lights.pdf_area(e.light, &ray, e.t))
-                };
-                l += beta * e.radiance * w;
+            if let Some(e) = self.lights.nearest_hit(&ray, t_hit) {
+                if e.radiance != Vec3A::ZERO {
+                    let w = if specular {
+                        1.0
+                    } else {
+                        power_heuristic(bsdf_pdf, self.lights.pdf_area(e.light, &ray, e.t))
+                    };
+                    l += beta * e.radiance * w;
+                }
+                break;
             }
             let Some(hit) = hit else {
                 let (le, light_pdf) = self.lights.environment();
@@ -122,7 +127,8 @@ impl<'a> PathTracer<'a> {
                             None => (Ray::new(origin, ls.wi), f32::INFINITY),
                         };
                         counts.shadow += 1;
-                        if !self.accel.occluded(&shadow, t_max) {
+                        let light_between = self.lights.nearest_hit(&shadow, t_max).is_some();
+                        if !light_between && !self.accel.occluded(&shadow, t_max) {
                             let w = if ls.delta {
                                 1.0
                             } else {
