@@ -326,7 +326,8 @@ def equal_time(binary, args):
         for (spp, t, e) in ours:
             ax.annotate(str(spp), (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
         ax.set_xlabel("render time (s), 2 threads")
-        ax.set_ylabel(f"relMSE (epsilon {EPSILON}) against Mitsuba at {args.spp_mitsuba} spp")
+        against = "the given reference" if args.reference else f"Mitsuba at {args.spp_mitsuba} spp"
+        ax.set_ylabel(f"relMSE (epsilon {EPSILON}) against {against}")
         ax.set_title(f"Cornell box {args.size}x{args.size}: error against time")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend()
