@@ -40,6 +40,11 @@ pub fn settings_warnings(scene: &Scene) -> Vec<String> {
             out.push("`[medium]` (exponential fog) is ignored: it is the Whitted integrator's model".into());
         }
     }
+    if s.medium.as_ref().is_some_and(|m| m.volume.is_some()) {
+        out.push(
+            "`[medium]` absorption, scattering and g are read but not rendered yet: no integrator uses them".into(),
+        );
+    }
     out
 }
 
@@ -198,5 +203,20 @@ mod tests {
         assert!(w[0].contains("1.200 in red"), "{w:?}");
 
         assert!(warnings_of(&Material::diffuse("ok", Vec3A::splat(0.9)), IntegratorKind::Path, true).is_empty());
+    }
+
+    #[test]
+    fn medium_coefficients_that_nothing_renders_are_named() {
+        let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/underwater.toml"));
+        let text = std::fs::read_to_string(path).unwrap();
+        let plain = crate::scene::load::parse_scene(&text, path).unwrap();
+        assert!(settings_warnings(&plain).iter().all(|w| !w.contains("absorption")));
+        let text = text.replace(
+            "[medium]",
+            "[medium]\nabsorption = [0.4, 0.05, 0.02]\nscattering = [0.1, 0.1, 0.1]",
+        );
+        let with_volume = crate::scene::load::parse_scene(&text, path).unwrap();
+        let w = settings_warnings(&with_volume);
+        assert!(w.iter().any(|w| w.contains("not rendered yet")), "{w:?}");
     }
 }
