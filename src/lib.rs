@@ -21,3 +21,4 @@ pub mod limits;
 pub mod math;
 pub mod memory;
 pub mod scene;
+pub mod view;

@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["accel", "bsdf"],
     &["integrator"],
     &["job"],
-    &["analysis"],
+    &["analysis", "view"],
 ];
 
 fn layer_of(module: &str) -> Option<usize> {

@@ -71,7 +71,12 @@ fn put(film: &mut Film, x: f32, y: f32, colour: Vec3) {
 /// chromaticity at a bright fixed level (no occlusion: a point cloud, as in
 /// the original report's figure 21).
 pub fn overlay_photons(film: &mut Film, scene: &Scene, map: &PhotonMap) {
-    let proj = Projector::new(&scene.camera, film.width, film.height);
+    overlay_photons_seen_by(film, &scene.camera, map);
+}
+
+/// [`overlay_photons`] seen from `camera` (the viewer's, which moves).
+pub fn overlay_photons_seen_by(film: &mut Film, camera: &Camera, map: &PhotonMap) {
+    let proj = Projector::new(camera, film.width, film.height);
     for i in 0..map.len() {
         let Some((x, y)) = map.coarse_position(i).and_then(|p| proj.project(p)) else {
             continue;

@@ -408,3 +408,28 @@ pub struct StressArgs {
 pub const DEFAULT_A: &str = "embree";
 #[cfg(not(feature = "embree"))]
 pub const DEFAULT_A: &str = "brute";
+
+/// `caustic view`.
+#[derive(Args)]
+pub struct ViewArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+    /// Image width (default 960).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default 540).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Target samples per pixel (default: the scene's).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Open no window: measure the interaction latency over N camera moves
+    /// and N material edits, print a table and JSON.
+    #[arg(long, value_name = "N")]
+    pub latency_bench: Option<usize>,
+    /// With --latency-bench: write the JSON report to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}

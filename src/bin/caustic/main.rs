@@ -4,8 +4,9 @@
 mod args;
 mod measure;
 mod render;
+mod view;
 
-use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, RenderArgs, StressArgs};
+use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, RenderArgs, StressArgs, ViewArgs};
 use caustic::job::JobError;
 use caustic::scene::{self, Scene};
 use clap::{Parser, Subcommand};
@@ -40,6 +41,10 @@ enum Command {
     /// scales, split-plane rays, degenerate triangles, grazing rays, TIR, NaN
     /// guards); exit 1 when a default configuration fails.
     Stress(StressArgs),
+    /// Open the interactive viewer: a progressive image beside the control
+    /// panel (lights, materials, photons, samples, accelerator), camera
+    /// navigation with the mouse, `p`/`k` debug views, save image and scene.
+    View(ViewArgs),
 }
 
 /// An error with its exit code.
@@ -79,6 +84,7 @@ fn main() -> ExitCode {
         Command::Converge(args) => measure::run_converge(args),
         Command::Bench(args) => measure::run_bench(args),
         Command::Stress(args) => measure::run_stress(args),
+        Command::View(args) => view::run_view(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,86 @@
+//! `caustic view`: the window, or its latency benchmark.
+
+use crate::args::ViewArgs;
+use crate::{bad_input, load, Failure};
+use caustic::view::{latency, DEFAULT_SIZE};
+
+pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
+    // A bad scene is refused before any window opens.
+    let mut scene = load(&args.scene)?;
+    args.accel.apply(&mut scene);
+    let size = (
+        args.width.unwrap_or(DEFAULT_SIZE.0),
+        args.height.unwrap_or(DEFAULT_SIZE.1),
+    );
+    caustic::limits::check_image_limits(size.0, size.1, args.spp.unwrap_or(1))
+        .map_err(|e| bad_input(anyhow::anyhow!("--width/--height: {e}")))?;
+    let kind = args.accel.kind();
+    if let Some(n) = args.latency_bench {
+        let report = latency::measure(&args.scene, size, kind, n.max(1)).map_err(bad_input)?;
+        print_latency(&report);
+        let json = serde_json::to_string_pretty(&report)?;
+        match &args.json {
+            Some(p) => {
+                std::fs::write(p, json + "\n").map_err(|e| bad_input(anyhow::anyhow!("{}: {e}", p.display())))?
+            }
+            None => println!("{json}"),
+        }
+        return Ok(());
+    }
+    open_window(&args, &scene, size, kind)
+}
+
+fn print_latency(r: &latency::LatencyReport) {
+    eprintln!("{} at {}×{} with {}", r.scene, r.width, r.height, r.accel);
+    eprintln!("  first image after start: {:.0} ms", r.startup_ms);
+    let row = |what: &str, m: &latency::Millis| {
+        eprintln!(
+            "  {what:<32} median {:7.1} ms  (min {:.1}, max {:.1})",
+            m.median, m.min, m.max
+        );
+    };
+    row("camera move → first image", &r.camera_first_image);
+    row("camera move → first full pass", &r.camera_first_full);
+    row("material edit → first image", &r.material_first_image);
+    row("material edit → first full pass", &r.material_first_full);
+    eprintln!("  photon passes re-run by those edits: {}", r.photon_reruns);
+    for p in &r.passes {
+        eprintln!(
+            "  pass to {:>3} spp: {:7.1} ms ({:.1} fps, {:.1} Mrays/s)",
+            p.spp,
+            p.ms,
+            1e3 / p.ms.max(1e-9),
+            p.mrays_per_second
+        );
+    }
+}
+
+#[cfg(feature = "viewer")]
+fn open_window(
+    args: &ViewArgs,
+    scene: &caustic::scene::Scene,
+    size: (u32, u32),
+    accel: caustic::accel::AccelKind,
+) -> Result<(), Failure> {
+    caustic::view::app::run(caustic::view::app::ViewOptions {
+        scene: args.scene.clone(),
+        accel,
+        size,
+        accel_options: args.accel.options(scene),
+        spp: args.spp,
+    })
+    .map_err(|e| Failure::from(anyhow::anyhow!(e)))
+}
+
+#[cfg(not(feature = "viewer"))]
+fn open_window(
+    _: &ViewArgs,
+    _: &caustic::scene::Scene,
+    _: (u32, u32),
+    _: caustic::accel::AccelKind,
+) -> Result<(), Failure> {
+    Err(bad_input(anyhow::anyhow!(
+        "this caustic was built without the `viewer` feature (the window); \
+         build it with `cargo build --release --features viewer`"
+    )))
+}

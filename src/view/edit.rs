@@ -1,0 +1,472 @@
+//! The scene as the viewer edits it: the loaded [`Scene`], the orbit camera,
+//! each light's colour and intensity kept apart (the scene stores their
+//! product), and the scene file's TOML document, into which edits are
+//! written back with their comments and layout kept.
+
+use super::orbit::Orbit;
+use crate::film::output::write_atomically;
+use crate::film::OutputError;
+use crate::math::Vec3A;
+use crate::scene::{self, Light, Material, Scene, SceneError, ShadingModel};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
+
+/// A light's parameters as the panel shows them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightEdit {
+    /// Position (point light) or centre (area light); unused for an
+    /// environment.
+    pub position: Vec3A,
+    /// Colour (the file's `colour`).
+    pub colour: Vec3A,
+    /// Scale on the colour (the file's `intensity`).
+    pub intensity: f32,
+    /// Area light: shadow rays per shading point.
+    pub samples: u32,
+}
+
+/// A scene being edited.
+#[derive(Clone)]
+pub struct EditableScene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// The scene with every edit applied (what the next pass renders).
+    pub scene: Scene,
+    /// The camera.
+    pub orbit: Orbit,
+    /// The camera of the file, for "reset camera".
+    pub initial_orbit: Orbit,
+    /// One per scene light.
+    pub lights: Vec<LightEdit>,
+    doc: DocumentMut,
+}
+
+/// A number of a TOML array or value, integer or float.
+fn number(v: &Value) -> Option<f64> {
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
+fn vec3_of(item: Option<&Item>) -> Option<Vec3A> {
+    let a = item?.as_array()?;
+    if a.len() != 3 {
+        return None;
+    }
+    let x: Vec<f64> = a.iter().filter_map(number).collect();
+    (x.len() == 3).then(|| Vec3A::new(x[0] as f32, x[1] as f32, x[2] as f32))
+}
+
+fn number_of(item: Option<&Item>) -> Option<f32> {
+    item?.as_value().and_then(number).map(|x| x as f32)
+}
+
+/// The shortest decimal that reads back as `x` through the scene loader
+/// (which parses an f64 and rounds it to f32).
+fn toml_number(x: f32) -> Value {
+    let short: f64 = format!("{x}").parse().unwrap_or(x as f64);
+    if short as f32 == x {
+        Value::from(short)
+    } else {
+        Value::from(x as f64)
+    }
+}
+
+fn toml_vec3(v: Vec3A) -> Item {
+    let mut a = Array::new();
+    for x in v.to_array() {
+        a.push(toml_number(x));
+    }
+    value(a)
+}
+
+/// The table at `key` of `table` (standard or inline), created as a
+/// standard table if missing.
+fn table_mut<'t>(table: &'t mut dyn TableLike, key: &str) -> &'t mut dyn TableLike {
+    if !table.contains_key(key) {
+        let mut t = Table::new();
+        t.set_implicit(false);
+        table.insert(key, Item::Table(t));
+    }
+    table
+        .get_mut(key)
+        .and_then(Item::as_table_like_mut)
+        .expect("a table (checked by the loader)")
+}
+
+/// Sets `key` of `table` to `item`, keeping its place when it exists.
+fn set(table: &mut dyn TableLike, key: &str, item: Item) {
+    match table.get_mut(key) {
+        Some(slot) => *slot = item,
+        None => {
+            table.insert(key, item);
+        }
+    }
+}
+
+impl EditableScene {
+    /// Loads `path` (validated like `caustic render` does).
+    pub fn open(path: &Path) -> Result<Self, SceneError> {
+        // The loader checks size, encoding and every value first.
+        let scene = scene::load_scene(path)?;
+        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        let doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| SceneError::Toml {
+            path: path.to_path_buf(),
+            place: None,
+            message: e.message().to_string(),
+        })?;
+        Ok(Self::from_parts(path, scene, doc))
+    }
+
+    fn from_parts(path: &Path, scene: Scene, doc: DocumentMut) -> Self {
+        let cam = &scene.camera;
+        let target = vec3_of(doc.get("camera").and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
+        let up = vec3_of(doc.get("camera").and_then(|c| c.get("up"))).unwrap_or(Vec3A::Y);
+        let orbit = Orbit::looking_at(cam.position, target, up, cam.vfov_deg)
+            .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, cam.vfov_deg))
+            .expect("a valid camera has a view direction");
+        let light_tables = doc.get("lights").and_then(|l| l.as_array_of_tables());
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, light)| {
+                let t = light_tables.and_then(|a| a.get(i));
+                let colour = t
+                    .and_then(|t| vec3_of(t.get("colour").or_else(|| t.get("color"))))
+                    .unwrap_or(Vec3A::ONE);
+                let intensity = t.and_then(|t| number_of(t.get("intensity"))).unwrap_or(1.0);
+                let (position, samples) = match light {
+                    Light::Point { position, .. } => (*position, 1),
+                    Light::Area(a) => (a.center, a.samples),
+                    Light::Environment { .. } => (Vec3A::ZERO, 1),
+                };
+                LightEdit {
+                    position,
+                    colour,
+                    intensity,
+                    samples,
+                }
+            })
+            .collect();
+        Self {
+            path: path.to_path_buf(),
+            scene,
+            orbit,
+            initial_orbit: orbit,
+            lights,
+            doc,
+        }
+    }
+
+    /// Copies the camera and the light edits into [`Self::scene`]; call after
+    /// changing [`Self::orbit`] or [`Self::lights`].
+    pub fn apply(&mut self) {
+        if let Some(cam) = self.orbit.camera() {
+            self.scene.camera = cam;
+        }
+        for (light, edit) in self.scene.lights.iter_mut().zip(&self.lights) {
+            // The loader's product, in the same order, so a saved file
+            // loads to the same f32 values.
+            let power = edit.colour * edit.intensity;
+            match light {
+                Light::Point { position, intensity } => {
+                    *position = edit.position;
+                    *intensity = power;
+                }
+                Light::Area(a) => {
+                    a.center = edit.position;
+                    a.radiance = power;
+                    a.samples = edit.samples.max(1);
+                }
+                Light::Environment { radiance } => *radiance = power,
+            }
+        }
+    }
+
+    /// The scene file's text with every edit written in.
+    pub fn to_toml(&self) -> String {
+        let mut doc = self.doc.clone();
+        self.write_camera(&mut doc);
+        self.write_edits(&mut doc);
+        doc.to_string()
+    }
+
+    /// The scene file's text with only the camera changed (to the view's).
+    pub fn camera_toml(&self) -> String {
+        let mut doc = self.doc.clone();
+        self.write_camera(&mut doc);
+        doc.to_string()
+    }
+
+    fn write_camera(&self, doc: &mut DocumentMut) {
+        let cam = table_mut(doc.as_table_mut(), "camera");
+        set(cam, "position", toml_vec3(self.orbit.eye()));
+        set(cam, "look_at", toml_vec3(self.orbit.target));
+        set(cam, "up", toml_vec3(self.orbit.up));
+        set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
+    }
+
+    fn write_edits(&self, doc: &mut DocumentMut) {
+        let root = doc.as_table_mut();
+        let s = &self.scene.settings;
+        {
+            let render = table_mut(root, "render");
+            set(render, "spp", value(s.spp as i64));
+            if let Some(d) = s.max_depth {
+                set(render, "max_depth", value(d as i64));
+            }
+        }
+        set(table_mut(root, "photons"), "count", value(s.photons.count as i64));
+        if let Some(tables) = root.get_mut("lights").and_then(|l| l.as_array_of_tables_mut()) {
+            for ((t, light), edit) in tables.iter_mut().zip(&self.scene.lights).zip(&self.lights) {
+                t.remove("color");
+                set(t, "colour", toml_vec3(edit.colour));
+                set(t, "intensity", value(toml_number(edit.intensity)));
+                match light {
+                    Light::Point { .. } => set(t, "position", toml_vec3(edit.position)),
+                    Light::Area(_) => {
+                        set(t, "position", toml_vec3(edit.position));
+                        set(t, "samples", value(edit.samples.max(1) as i64));
+                    }
+                    Light::Environment { .. } => {}
+                }
+            }
+        }
+        let materials = table_mut(root, "materials");
+        for m in &self.scene.materials {
+            write_material(table_mut(materials, &m.name), m);
+        }
+    }
+
+    /// Writes the edited scene to `path` atomically; `caustic render path`
+    /// then renders what the viewer shows.
+    pub fn save(&self, path: &Path) -> Result<(), OutputError> {
+        let mut doc = self.doc.clone();
+        self.write_camera(&mut doc);
+        self.write_edits(&mut doc);
+        rebase_mesh_files(&mut doc, &self.path, path);
+        write_text(path, &doc.to_string())
+    }
+
+    /// Writes the view's camera into the scene file's `[camera]` (nothing
+    /// else of the file changes), atomically.
+    pub fn save_camera(&self) -> Result<(), OutputError> {
+        write_text(&self.path, &self.camera_toml())
+    }
+}
+
+/// Mesh files are relative to the scene file: a scene saved into another
+/// directory names them by absolute path (`asset:` names stay).
+fn rebase_mesh_files(doc: &mut DocumentMut, from: &Path, to: &Path) {
+    let dir = |p: &Path| {
+        let d = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        d.canonicalize().unwrap_or_else(|_| d.to_path_buf())
+    };
+    let (from_dir, to_dir) = (dir(from), dir(to));
+    if from_dir == to_dir {
+        return;
+    }
+    let Some(objects) = doc.get_mut("objects").and_then(|o| o.as_array_of_tables_mut()) else {
+        return;
+    };
+    for o in objects.iter_mut() {
+        let Some(file) = o.get("file").and_then(|f| f.as_str()) else {
+            continue;
+        };
+        if file.starts_with("asset:") || Path::new(file).is_absolute() {
+            continue;
+        }
+        let absolute = from_dir.join(file).display().to_string();
+        set(o, "file", value(absolute));
+    }
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
+    write_atomically(path, |w| {
+        w.write_all(text.as_bytes()).map_err(|source| OutputError::Io {
+            path: path.to_path_buf(),
+            what: "write",
+            source,
+        })
+    })
+}
+
+fn write_material(t: &mut dyn TableLike, m: &Material) {
+    let model = match m.model {
+        ShadingModel::Phong => "phong",
+        ShadingModel::BlinnPhong => "blinn-phong",
+    };
+    set(t, "model", value(model));
+    set(t, "ambient", toml_vec3(m.ambient));
+    set(t, "diffuse", toml_vec3(m.diffuse));
+    set(t, "specular", toml_vec3(m.specular));
+    set(t, "shininess", value(toml_number(m.shininess)));
+    match m.mirror {
+        Some(mirror) => {
+            let mt = table_mut(t, "mirror");
+            set(mt, "reflectivity", value(toml_number(mirror.reflectivity)));
+            set(mt, "tint", toml_vec3(mirror.tint));
+        }
+        None => {
+            t.remove("mirror");
+        }
+    }
+    if let Some(d) = m.dielectric {
+        let dt = table_mut(t, "dielectric");
+        set(dt, "ior", value(toml_number(d.ior)));
+        set(dt, "tint", toml_vec3(d.tint));
+    }
+}
+
+/// True when the photon pass of `a` and of `b` trace the same photons: the
+/// lights, the photon settings, the bounce limit, the medium and every
+/// specular material (a caster or a surface photons pass through) are the
+/// same, and no material changed between diffuse and specular. Camera
+/// moves and edits of diffuse materials keep the map.
+pub fn same_photons(a: &Scene, b: &Scene) -> bool {
+    let (sa, sb) = (&a.settings, &b.settings);
+    a.lights == b.lights
+        && sa.photons == sb.photons
+        && sa.max_depth == sb.max_depth
+        && sa.seed == sb.seed
+        && sa.medium == sb.medium
+        && sa.integrator == sb.integrator
+        && (sa.width, sa.height) == (sb.width, sb.height)
+        && a.objects == b.objects
+        && a.materials.len() == b.materials.len()
+        && a.materials.iter().zip(&b.materials).all(|(ma, mb)| {
+            ma == mb
+                || (!ma.is_specular()
+                    && !mb.is_specular()
+                    && ma.is_diffuse() == mb.is_diffuse()
+                    && ma.coating == mb.coating
+                    && ma.conductor == mb.conductor
+                    && ma.dielectric == mb.dielectric)
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = r#"
+# a comment that survives saving
+[render]
+width = 32
+height = 24
+spp = 4
+
+[camera]
+position = [0, 1, 4]
+look_at = [0, 0.5, 0]
+vfov = 45
+
+[materials.white]
+diffuse = [0.7, 0.7, 0.7]
+
+[materials.glass.dielectric]
+ior = 1.5
+
+[[lights]]
+type = "point"
+position = [0, 2, 1]
+color = [1, 0.9, 0.8]
+intensity = 3
+
+[[objects]]
+type = "sphere"
+center = [0, 0.5, 0]
+radius = 0.5
+material = "glass"
+
+[[objects]]
+type = "quad"
+center = [0, 0, 0]
+size = [4, 4]
+normal = [0, 1, 0]
+material = "white"
+"#;
+
+    fn open_text(dir: &Path, text: &str) -> EditableScene {
+        let p = dir.join("s.toml");
+        std::fs::write(&p, text).unwrap();
+        EditableScene::open(&p).unwrap()
+    }
+
+    #[test]
+    fn unedited_scene_saves_to_the_same_scene() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = open_text(dir.path(), SCENE);
+        assert_eq!(e.lights[0].intensity, 3.0);
+        assert_eq!(e.lights[0].colour, Vec3A::new(1.0, 0.9, 0.8));
+        let out = dir.path().join("saved.toml");
+        e.save(&out).unwrap();
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert!(text.contains("# a comment that survives saving"));
+        let again = scene::load_scene(&out).unwrap();
+        assert_eq!(again.lights, e.scene.lights);
+        assert_eq!(again.materials, e.scene.materials);
+        assert!((again.camera.position - e.scene.camera.position).length() < 1e-5);
+    }
+
+    #[test]
+    fn edits_are_applied_and_saved() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut e = open_text(dir.path(), SCENE);
+        e.lights[0].position = Vec3A::new(0.5, 2.5, 1.25);
+        e.lights[0].intensity = 7.3;
+        e.orbit.rotate(50.0, 10.0, 100.0);
+        e.scene.materials[1].diffuse = Vec3A::new(0.1, 0.2, 0.3);
+        e.scene.materials[0].dielectric.as_mut().unwrap().ior = 1.33;
+        e.scene.settings.spp = 9;
+        e.scene.settings.photons.count = 1234;
+        e.apply();
+        let out = dir.path().join("edited.toml");
+        e.save(&out).unwrap();
+        let again = scene::load_scene(&out).unwrap();
+        assert_eq!(again.lights, e.scene.lights);
+        assert_eq!(again.materials, e.scene.materials);
+        assert_eq!(again.settings.spp, 9);
+        assert_eq!(again.settings.photons.count, 1234);
+        let (a, b) = (again.camera, e.scene.camera);
+        assert!((a.position - b.position).length() < 1e-5);
+        assert!((a.forward - b.forward).length() < 1e-5);
+    }
+
+    #[test]
+    fn photon_map_is_kept_for_camera_and_diffuse_edits_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = open_text(dir.path(), SCENE);
+        let mut b = e.clone();
+        b.orbit.zoom(2.0);
+        b.scene
+            .materials
+            .iter_mut()
+            .find(|m| m.name == "white")
+            .unwrap()
+            .diffuse = Vec3A::splat(0.2);
+        b.apply();
+        assert!(same_photons(&e.scene, &b.scene));
+        let mut c = e.clone();
+        c.scene
+            .materials
+            .iter_mut()
+            .find(|m| m.name == "glass")
+            .unwrap()
+            .dielectric
+            .as_mut()
+            .unwrap()
+            .ior = 1.2;
+        assert!(!same_photons(&e.scene, &c.scene));
+        let mut d = e.clone();
+        d.lights[0].intensity = 1.0;
+        d.apply();
+        assert!(!same_photons(&e.scene, &d.scene));
+    }
+}
