@@ -71,13 +71,16 @@ fn put(film: &mut Film, x: f32, y: f32, colour: Vec3) {
 /// chromaticity at a bright fixed level (no occlusion: a point cloud, as in
 /// the original report's figure 21).
 pub fn overlay_photons(film: &mut Film, scene: &Scene, map: &PhotonMap) {
-    overlay_photons_seen_by(film, &scene.camera, map);
+    overlay_photons_seen_by(film, &scene.camera, map, usize::MAX);
 }
 
-/// [`overlay_photons`] seen from `camera` (the viewer's, which moves).
-pub fn overlay_photons_seen_by(film: &mut Film, camera: &Camera, map: &PhotonMap) {
+/// [`overlay_photons`] seen from `camera` (the viewer's, which moves),
+/// drawing at most `max_points` photons, evenly spread over the map (a
+/// million photons on a 960×540 view would cover it).
+pub fn overlay_photons_seen_by(film: &mut Film, camera: &Camera, map: &PhotonMap, max_points: usize) {
     let proj = Projector::new(camera, film.width, film.height);
-    for i in 0..map.len() {
+    let stride = map.len().div_ceil(max_points.max(1)).max(1);
+    for i in (0..map.len()).step_by(stride) {
         let Some((x, y)) = map.coarse_position(i).and_then(|p| proj.project(p)) else {
             continue;
         };

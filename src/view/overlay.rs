@@ -53,7 +53,9 @@ pub fn debug_layer(
         debug::overlay_boxes(&mut layer, camera, &shown);
     }
     if let Some(map) = photons {
-        debug::overlay_photons_seen_by(&mut layer, camera, map);
+        // One photon drawn per 8 pixels at most keeps the image readable.
+        let most = (width as usize * height as usize / 8).max(1);
+        debug::overlay_photons_seen_by(&mut layer, camera, map, most);
     }
     layer
 }
