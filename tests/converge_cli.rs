@@ -322,3 +322,26 @@ fn bad_inputs_exit_2_with_a_clear_message() {
         assert!(stderr.contains(want), "{args:?}: want {want:?}\n{stderr}");
     }
 }
+
+#[test]
+fn sample_budgets_without_a_photon_count_use_the_given_count_not_the_warm_ups() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("p.csv");
+    let o = converge(&[
+        "--budgets",
+        "1",
+        "--accel",
+        "kdtree",
+        "--photons",
+        "150000",
+        "--threads",
+        "1",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rows = parse_csv(&csv);
+    // The untimed warm-up emits at most 100,000 photons; the measured
+    // render emits what was asked for.
+    assert_eq!(rows[0].photons, 150_000);
+}

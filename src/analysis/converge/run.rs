@@ -182,13 +182,16 @@ struct Renderer<'a> {
     reference: &'a Film,
     epsilon: f64,
     photons_per_spp: Option<u64>,
+    /// The scene's own photon count: `configure` overwrites the scene's
+    /// for each render (the warm-up's included), so it is kept apart.
+    scene_photons: u64,
 }
 
 impl Renderer<'_> {
     fn default_photons(&self, spp: u32) -> u64 {
         match self.photons_per_spp {
             Some(r) => r.saturating_mul(spp as u64),
-            None => self.scene.settings.photons.count,
+            None => self.scene_photons,
         }
     }
 
@@ -294,6 +297,7 @@ pub fn run(
         reference,
         epsilon: options.epsilon,
         photons_per_spp: options.photons_per_spp,
+        scene_photons: scene.settings.photons.count,
     };
     // Sample budgets are checked against the limits before anything renders.
     for b in &options.budgets {
