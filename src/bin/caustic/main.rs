@@ -5,7 +5,7 @@ mod args;
 mod measure;
 mod render;
 
-use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, RenderArgs, StressArgs};
+use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, MergeArgs, RenderArgs, StressArgs};
 use caustic::job::JobError;
 use caustic::scene::{self, Scene};
 use clap::{Parser, Subcommand};
@@ -24,6 +24,9 @@ struct Cli {
 enum Command {
     /// Render a scene file to PNG (tone mapped) and/or EXR (linear HDR).
     Render(RenderArgs),
+    /// Merge the partials of a render split with `render --shard` into one
+    /// image (every shard) or into a new partial (any subset).
+    Merge(MergeArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
     /// Cast seeded rays through two accelerators (default Embree and the
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Render(args) => render::run_render(args),
+        Command::Merge(args) => render::run_merge(args),
         Command::Info(args) => measure::run_info(args),
         Command::Crosscheck(args) => measure::run_crosscheck(args),
         Command::Converge(args) => measure::run_converge(args),
