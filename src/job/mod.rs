@@ -590,7 +590,7 @@ fn shard_of(
     }
     if set.mode == ShardMode::Samples && set.count > st.spp {
         return Err(JobError::Invalid(format!(
-            "{set}: {} shards by samples need at least as many samples per pixel (the render has {})",
+            "{set}: splitting by samples needs at least {} samples per pixel, one per shard (the render has {})",
             set.count, st.spp
         )));
     }
