@@ -1,8 +1,10 @@
 //! Sharded renders and their merge: tiles shards merge bit-identical to a
 //! single-process render for several shard and thread counts (tree merges
 //! and resumed shards too); sample shards merge within the stated bound;
-//! every refusal of `merge`; `--shard auto`'s environment parsing; the
-//! command line end to end (exit codes, byte-identical PNG).
+//! every refusal of `merge`; `--shard auto`'s environment parsing; photon
+//! files (`caustic photons`, `--photon-map`) give the same image and are
+//! refused for another render; the command line end to end (exit codes,
+//! byte-identical PNG).
 
 use caustic::accel::AccelKind;
 use caustic::film::shard::samples_merge_bound;
@@ -546,4 +548,127 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
         run(with(&["--shard", "0/2", "--resume", &p("part-1.exr")]), &[]),
         "not shard 0/2",
     );
+
+    // A photon file traced once, loaded by a shard; refused for another seed.
+    let o = caustic(
+        &[
+            "photons",
+            SCENE,
+            "--photons",
+            "10000",
+            "--accel",
+            "kdtree",
+            "--quiet",
+            "-o",
+            &p("map.bin"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(
+        with(&["--shard", "1/3", "--photon-map", &p("map.bin"), "-o", &p("map-1.exr")]),
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = caustic(
+        &[
+            "merge",
+            &p("part-0.exr"),
+            &p("map-1.exr"),
+            &p("part-2.exr"),
+            "-o",
+            &p("merged-map.png"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(p("merged-map.png")).unwrap(),
+        std::fs::read(p("single.png")).unwrap()
+    );
+    refused(
+        run(
+            with(&["--seed", "9", "--photon-map", &p("map.bin"), "-o", &p("x.png")]),
+            &[],
+        ),
+        "map.bin: photons of another scene",
+    );
+}
+
+#[test]
+fn a_photon_file_gives_the_same_image_and_is_refused_for_another_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n);
+    let base = request(4, 3);
+    let reference = single(&base, 2, &p("single.png"));
+    let photons = |path: &Path, overrides: &job::Overrides| {
+        let request = job::PhotonsRequest {
+            scene: scene_path(),
+            overrides: overrides.clone(),
+            accel: Some(AccelKind::KdTree),
+            accel_options: Default::default(),
+            output: path.to_path_buf(),
+        };
+        job::trace_to_file(&request)
+    };
+    let report = photons(&p("map.bin"), &base.overrides).unwrap();
+    assert_eq!(report.emitted, 20_000);
+    assert!(report.stored > 1000, "{report:?}");
+    // Every shard loads the file: the merge is the single render, bit for bit.
+    let mut with_map = base.clone();
+    with_map.photon_map = Some(p("map.bin"));
+    let parts: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            let part = p(&format!("m{i}.exr"));
+            shard(&with_map, i, 3, ShardMode::Tiles, 1 + i as usize % 2, &part);
+            part
+        })
+        .collect();
+    assert!(merge(&parts, Some(&p("m.png")), None).unwrap().accumulation == reference);
+    assert_eq!(
+        std::fs::read(p("m.png")).unwrap(),
+        std::fs::read(p("single.png")).unwrap()
+    );
+    // The image size and samples do not matter to the photons.
+    let mut bigger = with_map.clone();
+    bigger.overrides.width = Some(80);
+    bigger.overrides.spp = Some(2);
+    assert!(RenderJob::prepare(&bigger).is_ok());
+    // Another photon count, seed or accelerator, no photon pass, a bad file: refused.
+    let mut other = with_map.clone();
+    other.overrides.photons = Some(30_000);
+    let e = RenderJob::prepare(&other).err().unwrap();
+    assert!(e.is_bad_input() && e.to_string().contains("map.bin"), "{e}");
+    assert!(e.to_string().contains("20000 photons in the file, 30000 here"), "{e}");
+    let mut other = with_map.clone();
+    other.overrides.seed = Some(4);
+    assert!(RenderJob::prepare(&other)
+        .err()
+        .unwrap()
+        .to_string()
+        .contains("another scene or other settings"));
+    let mut other = with_map.clone();
+    other.accel = Some(AccelKind::Brute);
+    assert!(RenderJob::prepare(&other).is_err());
+    let mut none = with_map.clone();
+    none.overrides.photons = Some(0);
+    assert!(RenderJob::prepare(&none)
+        .err()
+        .unwrap()
+        .to_string()
+        .contains("no photon pass"));
+    std::fs::write(p("junk.bin"), b"caustic-photon1\n").unwrap();
+    let mut junk = base.clone();
+    junk.photon_map = Some(p("junk.bin"));
+    let e = RenderJob::prepare(&junk).err().unwrap().to_string();
+    assert!(
+        e.contains("junk.bin") && e.contains("not a valid caustic photon file"),
+        "{e}"
+    );
+    let mut no_pass = base.overrides.clone();
+    no_pass.photons = Some(0);
+    assert!(photons(&p("none.bin"), &no_pass)
+        .unwrap_err()
+        .to_string()
+        .contains("no photon pass"));
 }

@@ -21,6 +21,36 @@ use sha2::{Digest, Sha256};
 /// they never change a sample, and every shard of a render shares its
 /// fingerprint.
 pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
+    fingerprint_of(scene, &scene.settings, None, accel, accel_options)
+}
+
+/// Hex SHA-256 of everything the traced photons depend on
+/// (`caustic photons`, `--photon-map`): [`fingerprint`]'s fields with the
+/// image size, samples per pixel, sampler and adaptive sampling left out
+/// (the trace never reads them; the map's precompute, which depends on the
+/// image size, runs when a render loads the photons), and a purpose field
+/// so that it never equals a render's fingerprint.
+pub fn photon_fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
+    let defaults = RenderSettings::default();
+    let settings = RenderSettings {
+        width: defaults.width,
+        height: defaults.height,
+        spp: defaults.spp,
+        noise_threshold: None,
+        min_spp: defaults.min_spp,
+        sampler: None,
+        ..scene.settings.clone()
+    };
+    fingerprint_of(scene, &settings, Some("photons"), accel, accel_options)
+}
+
+fn fingerprint_of(
+    scene: &Scene,
+    settings: &RenderSettings,
+    purpose: Option<&str>,
+    accel: AccelKind,
+    accel_options: &str,
+) -> String {
     let mut h = Sha256::new();
     let mut field = |name: &str, bytes: &[u8]| {
         // Length-prefixed so that no two field sequences hash alike.
@@ -34,11 +64,14 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
     // checkpoints still resume).
     field("format", crate::film::checkpoint::CHECKPOINT_FORMAT_2.as_bytes());
     field("version", env!("CARGO_PKG_VERSION").as_bytes());
+    if let Some(purpose) = purpose {
+        field("purpose", purpose.as_bytes());
+    }
     // Debug output of f32 is the shortest text that round-trips, so it
     // identifies values exactly.
     let settings = RenderSettings {
         output: crate::film::OutputSettings::default(),
-        ..scene.settings.clone()
+        ..settings.clone()
     };
     field("settings", format!("{settings:?}").as_bytes());
     field("camera", format!("{:?}", scene.camera).as_bytes());

@@ -13,17 +13,20 @@
 pub mod fingerprint;
 pub mod interrupt;
 pub mod merge;
+pub mod photons;
 pub mod shard_env;
 
 pub use fingerprint::fingerprint;
 pub use interrupt::Interrupt;
 pub use merge::{merge_partials, MergeReport, MergeRequest};
+pub use photons::{trace_to_file, PhotonsReport, PhotonsRequest};
 pub use shard_env::{parse_shard_arg, shard_from_env};
 
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, AccelStats};
 use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, Film, OutputError, ShardMode, ShardSet};
 use crate::geometry::TriangleTest;
 use crate::integrator::lint;
+use crate::integrator::photon::TracedPhotons;
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
 use crate::math::SamplerKind;
 use crate::scene::{self, IntegratorKind, Scene, SceneError};
@@ -150,6 +153,10 @@ pub struct RenderRequest {
     /// partial to `checkpoint` (required then), saved periodically like a
     /// checkpoint. When resuming a partial, `None` takes the partial's shard.
     pub shard: Option<ShardSet>,
+    /// Photons traced beforehand (`caustic photons`) to build the caustic
+    /// map from instead of tracing it; refused unless its fingerprint is
+    /// this render's.
+    pub photon_map: Option<PathBuf>,
 }
 
 impl RenderRequest {
@@ -170,6 +177,7 @@ impl RenderRequest {
             debug: None,
             time_limit: None,
             shard: None,
+            photon_map: None,
         }
     }
 }
@@ -235,6 +243,8 @@ pub struct RenderJob {
     pub time_limit: Option<Duration>,
     /// The shard this job renders (its partial is the checkpoint file).
     pub shard: Option<ShardSet>,
+    /// Photons loaded from a photon file, checked against this render.
+    pub photons: Option<TracedPhotons>,
 }
 
 /// Reported once the accelerator is built, before the first sample.
@@ -363,6 +373,10 @@ impl RenderJob {
                 )));
             }
         }
+        let photons = match &request.photon_map {
+            Some(path) => Some(photons::load_for(path, &scene, accel, &accel_options)?),
+            None => None,
+        };
         // Fail before hours of rendering, not after.
         for out in request.png.iter().chain(&request.exr).chain(&checkpoint_path) {
             film::check_writable(out)?;
@@ -388,6 +402,7 @@ impl RenderJob {
             debug: request.debug,
             time_limit: request.time_limit,
             shard,
+            photons,
             scene,
         })
     }
@@ -409,6 +424,7 @@ impl RenderJob {
             debug: None,
             time_limit: None,
             shard: None,
+            photons: None,
         }
     }
 
@@ -478,7 +494,7 @@ impl RenderJob {
             deadline: self.time_limit.map(|t| Instant::now() + t),
         };
         let begin = Instant::now();
-        let mut output = integrator::render_with_control(&self.scene, accel, &plan, self.start, &control);
+        let mut output = integrator::render_with_traced(&self.scene, accel, &plan, self.photons, self.start, &control);
         if let Some(set) = &shard {
             output.complete = set.is_complete(&output.accumulation, st.spp);
             output.timed_out &= !output.complete;

@@ -236,6 +236,47 @@ pub struct RenderArgs {
     /// (Kubernetes: the Job's completions).
     #[arg(long, requires = "shard")]
     pub shard_count: Option<u32>,
+    /// Build the caustic map from photons traced beforehand by `caustic photons`
+    /// (refused unless they are this render's: same scene, photons, seed and
+    /// accelerator) instead of tracing them.
+    #[arg(long, value_name = "FILE")]
+    pub photon_map: Option<PathBuf>,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+#[derive(Args)]
+pub struct PhotonsArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// The photon file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Override the number of photons emitted.
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Override the seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Light transport algorithm (path tracing has no photon pass).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Image width: accepted so that a render's flags can be reused; the
+    /// photons do not depend on it.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (as --width).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel (as --width).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
     #[command(flatten)]
     pub accel: AccelArgs,
 }

@@ -5,7 +5,7 @@ mod args;
 mod measure;
 mod render;
 
-use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, MergeArgs, RenderArgs, StressArgs};
+use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, MergeArgs, PhotonsArgs, RenderArgs, StressArgs};
 use caustic::job::JobError;
 use caustic::scene::{self, Scene};
 use clap::{Parser, Subcommand};
@@ -27,6 +27,9 @@ enum Command {
     /// Merge the partials of a render split with `render --shard` into one
     /// image (every shard) or into a new partial (any subset).
     Merge(MergeArgs),
+    /// Trace a scene's caustic photons once into a file that renders (every
+    /// shard of one) load with --photon-map instead of tracing them.
+    Photons(PhotonsArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
     /// Cast seeded rays through two accelerators (default Embree and the
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run_render(args),
         Command::Merge(args) => render::run_merge(args),
+        Command::Photons(args) => render::run_photons(args),
         Command::Info(args) => measure::run_info(args),
         Command::Crosscheck(args) => measure::run_crosscheck(args),
         Command::Converge(args) => measure::run_converge(args),

@@ -1,6 +1,6 @@
 //! `caustic render`: a [`RenderJob`] with a progress bar, Ctrl-C and a summary.
 
-use crate::args::{DebugView, MergeArgs, RenderArgs};
+use crate::args::{DebugView, MergeArgs, PhotonsArgs, RenderArgs};
 use crate::{bad_input, job_failure, Failure};
 use anyhow::Context;
 use caustic::accel::AccelKind;
@@ -64,6 +64,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             },
         }),
         shard: shard.flatten(),
+        photon_map: args.photon_map.clone(),
     };
     let job = RenderJob::prepare(&request).map_err(job_failure)?;
     let interrupt = job::Interrupt::install().context("cannot install the Ctrl-C handler")?;
@@ -131,6 +132,48 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
             );
         }
         println!("written: {}", report.written.join(", "));
+    }
+    Ok(())
+}
+
+/// `caustic photons`: the traced photons of a scene into a file.
+pub fn run_photons(args: PhotonsArgs) -> Result<(), Failure> {
+    let request = job::PhotonsRequest {
+        scene: args.scene.clone(),
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            seed: args.seed,
+            photons: args.photons,
+            triangle_test: args.accel.backend.triangle_test(),
+            integrator: args.integrator.map(Into::into),
+            ..Overrides::default()
+        },
+        accel: args.accel.accel.map(AccelKind::from),
+        accel_options: caustic::accel::AccelOptions {
+            embree_quality: args.accel.backend.embree_quality.name().into(),
+            embree_robust: args.accel.backend.embree_robust,
+            ..Default::default()
+        },
+        output: args.output.clone(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let report = pool.install(|| job::trace_to_file(&request)).map_err(job_failure)?;
+    if !args.quiet {
+        println!(
+            "photons: {} emitted, {} stored, {} rays, traced in {:.3} s; written {} ({:.1} MiB in {:.3} s)",
+            report.emitted,
+            report.stored,
+            report.rays,
+            report.trace_time.as_secs_f64(),
+            args.output.display(),
+            report.bytes as f64 / (1024.0 * 1024.0),
+            report.write_time.as_secs_f64()
+        );
     }
     Ok(())
 }
