@@ -525,6 +525,14 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
     refused(run(with(&["--shard", "3/3", "-o", &p("a.exr")]), &[]), "0..=2");
     refused(run(with(&["--shard", "0/3"]), &[]), "-o PART.exr");
     refused(
+        run(with(&["--shard", "0/3", "-o", &p("a.png")]), &[]),
+        "name it PART.exr",
+    );
+    refused(
+        run(with(&["--resume", &p("part-1.exr"), "-o", &p("a.png")]), &[]),
+        "name it PART.exr",
+    );
+    refused(
         run(
             with(&[
                 "--shard",

@@ -101,6 +101,14 @@ fn shard_request(args: &RenderArgs) -> Result<Option<Option<ShardSet>>, Failure>
                  --exr and --checkpoint do not apply; merge the partials with caustic merge"
             )));
         }
+        let is_exr = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        if let Some(out) = args.output.as_ref().filter(|p| !is_exr(p)) {
+            return Err(bad_input(anyhow::anyhow!(
+                "-o {}: a shard writes its partial as an EXR: name it PART.exr (merge the partials into a PNG \
+                 with caustic merge)",
+                out.display()
+            )));
+        }
         if args.output.is_none() && args.resume.is_none() {
             return Err(bad_input(anyhow::anyhow!(
                 "--shard needs -o PART.exr: the file its partial is written to"
