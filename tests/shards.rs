@@ -139,6 +139,10 @@ fn an_interrupted_shard_resumes_bit_for_bit() {
             resume.resume = Some(p.clone());
             let report = run(&resume, 1);
             assert!(report.complete());
+            // A finished partial resumed again has nothing to do: no photon pass.
+            let again = run(&resume, 1);
+            assert!(again.complete() && again.output.stats.photons.is_none());
+            assert!(again.output.accumulation == report.output.accumulation);
         } else {
             shard(&base, i, count, ShardMode::Tiles, 2, &p);
         }

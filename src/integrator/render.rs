@@ -313,8 +313,9 @@ pub fn render_with_traced(
     let begin = Instant::now();
     let spp = plan.spp.max(1);
     let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
-    // Nothing to render: no photon pass either.
-    let photons = if control.cancelled() || start.taken_range().0 >= limit {
+    // Nothing to render (every pixel still sampling is at the limit, or
+    // none is: converged, or another shard's): no photon pass either.
+    let photons = if control.cancelled() || start.active_level().is_none_or(|level| level >= limit) {
         None
     } else {
         match traced {
