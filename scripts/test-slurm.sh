@@ -95,6 +95,8 @@ for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.1; done
 # Free ports for the two daemons (another Slurm on the machine keeps its own).
 port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 ctld_port=$(port)
+cpus=$(nproc)
+[ "$cpus" -gt 2 ] && cpus=2  # the one-node cluster of 2 CPUs (fewer if the machine has fewer)
 slurmd_port=$(port)
 cat >"$tmp/slurm.conf" <<EOF
 ClusterName=caustic-test
@@ -123,7 +125,7 @@ MpiDefault=none
 ReturnToService=2
 SlurmctldTimeout=30
 SlurmdTimeout=30
-NodeName=$host NodeAddr=127.0.0.1 CPUs=2 State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF=$tmp/slurm.conf
@@ -138,7 +140,7 @@ for _ in $(seq 100); do
   sleep 0.2
 done
 [ "$state" = idle ] || { echo "test-slurm: the node is not idle (state: ${state:-none})" >&2; exit 1; }
-echo "test-slurm: cluster up (node $host, 2 CPUs, slurmctld port $ctld_port)"
+echo "test-slurm: cluster up (node $host, $cpus CPUs, slurmctld port $ctld_port)"
 
 # The render: 4 shards of the Cornell box, small.
 export CAUSTIC=$caustic
@@ -168,6 +170,18 @@ if [ "$SHARD_BY" = tiles ]; then
 else
   echo "test-slurm: PASS: 4 sample shards merged through Slurm (PNG compared by tests/shards.rs, not here)"
 fi
+
+# Again with the photons traced once (caustic photons) and loaded by every task.
+# shellcheck disable=SC2086
+"$caustic" photons "$SCENE" $CAUSTIC_ARGS --quiet -o "$tmp/work/photons.bin"
+export PHOTON_MAP=$tmp/work/photons.bin PARTS=$tmp/work/parts-map OUTPUT=$tmp/work/merged-map.png
+jid=$(sbatch --parsable "$root/examples/slurm/render.sbatch")
+sbatch --wait --dependency="afterok:$jid" "$root/examples/slurm/merge.sbatch" >/dev/null
+if [ "$SHARD_BY" = tiles ]; then
+  cmp "$OUTPUT" "$tmp/work/single.png"
+  echo "test-slurm: PASS: the same with --photon-map (array job $jid), byte-identical"
+fi
+unset PHOTON_MAP
 
 # The workstation way (docs/cluster.md): xargs -P, same bytes.
 mkdir -p "$tmp/work/xargs" && cd "$tmp/work/xargs"
