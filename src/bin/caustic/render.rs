@@ -1,4 +1,4 @@
-//! `caustic render`: a [`RenderJob`] with a progress bar, Ctrl-C and a summary.
+//! `caustic render` (a [`RenderJob`] with a progress bar, Ctrl-C and a summary), `caustic merge` and `caustic photons`.
 
 use crate::args::{DebugView, MergeArgs, PhotonsArgs, RenderArgs};
 use crate::{bad_input, job_failure, Failure};
