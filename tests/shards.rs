@@ -53,6 +53,7 @@ fn shard(base: &RenderRequest, index: u32, count: u32, mode: ShardMode, threads:
 fn single(base: &RenderRequest, threads: usize, png: &Path) -> Accumulation {
     let mut r = base.clone();
     r.png = Some(png.to_path_buf());
+    r.exr = Some(png.with_extension("exr"));
     run(&r, threads).output.accumulation
 }
 
@@ -80,13 +81,19 @@ fn tiles_merge_is_bit_identical_for_any_shard_and_thread_count() {
             })
             .collect();
         let png = dir.path().join(format!("merged-{count}.png"));
-        let report = merge(&parts, Some(&png), None).unwrap();
+        let exr = png.with_extension("exr");
+        let report = merge_partials(&MergeRequest {
+            partials: parts.clone(),
+            png: Some(png.clone()),
+            exr: Some(exr.clone()),
+            partial: None,
+        })
+        .unwrap();
         assert!(report.accumulation == reference, "{count} shards, {threads} threads");
-        assert_eq!(
-            std::fs::read(&png).unwrap(),
-            std::fs::read(&reference_png).unwrap(),
-            "{count} shards"
-        );
+        for (merged, single) in [(&png, &reference_png), (&exr, &reference_png.with_extension("exr"))] {
+            let same = std::fs::read(merged).unwrap() == std::fs::read(single).unwrap();
+            assert!(same, "{count} shards: {} differs", merged.display());
+        }
         if count == 4 {
             // A tree: (0, 2) and (1, 3) into partials, then those two.
             let a = dir.path().join("t02.exr");
