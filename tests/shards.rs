@@ -311,6 +311,17 @@ fn merge_refuses_what_does_not_belong_together_naming_the_file() {
         None,
         &["short2.exr", "not finished", "--resume"],
     );
+    // A header edited to another size under the same fingerprint.
+    let t1 = read_checkpoint(&p("t1.exr")).unwrap();
+    let mut meta = t1.meta.clone();
+    (meta.width, meta.height) = (32, 24);
+    write_checkpoint(&p("edited1.exr"), &Accumulation::new(32, 24), &meta).unwrap();
+    refuse(
+        &["t0.exr", "edited1.exr", "t2.exr"],
+        Some(&out),
+        None,
+        &["edited1.exr", "damaged or edited", "width 64"],
+    );
     // And the good set merges.
     merge(&[p("t2.exr"), p("t0.exr"), p("t1.exr")], Some(&out), None).unwrap();
     assert!(out.exists());

@@ -90,6 +90,15 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
                 fingerprint::differences_between(first, &format!("in {}", first_path.display()), meta, "here")
             )));
         }
+        let shape = |m: &CheckpointMeta| (m.width, m.height, m.spp, m.seed, m.photons, m.accel.clone());
+        if shape(meta) != shape(first) {
+            return Err(invalid(format!(
+                "{}: the same fingerprint as {} but other recorded settings ({}): a damaged or edited partial",
+                path.display(),
+                first_path.display(),
+                fingerprint::differences_between(first, &format!("in {}", first_path.display()), meta, "here")
+            )));
+        }
         if set.mode != first_set.mode {
             return Err(invalid(format!(
                 "{}: split by {}, but {} is split by {}: shards of one render share a mode",

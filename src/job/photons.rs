@@ -89,15 +89,15 @@ pub fn load_for(
     accel: AccelKind,
     options: &AccelOptions,
 ) -> Result<TracedPhotons, JobError> {
-    if planned_photons(&RenderPlan::new(scene)).is_none() {
+    let Some(planned) = planned_photons(&RenderPlan::new(scene)) else {
         return Err(JobError::Invalid(format!(
             "--photon-map {}: this render runs no photon pass (no mirror or glass object, --photons 0, \
              or path tracing)",
             path.display()
         )));
-    }
+    };
     let (traced, fingerprint) = read_photons(path).map_err(|e| JobError::Invalid(e.to_string()))?;
-    if fingerprint != photon_fingerprint(scene, accel, &options.fingerprint_text(accel)) {
+    if fingerprint != photon_fingerprint(scene, accel, &options.fingerprint_text(accel)) || traced.emitted != planned {
         return Err(JobError::Invalid(format!(
             "{}: photons of another scene or other settings ({} photons in the file, {} here; or the seed, \
              the scene, a mesh or the accelerator differ); trace them again with caustic photons",
