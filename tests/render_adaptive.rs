@@ -127,6 +127,8 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
             photons: 0,
             accel: "kdtree".into(),
             fingerprint: "0".repeat(64),
+            output: Default::default(),
+            shard: None,
         };
         write_checkpoint(&path, &part.accumulation, &meta).unwrap();
         let resumed = read_checkpoint(&path).unwrap().accumulation;

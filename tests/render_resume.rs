@@ -119,6 +119,8 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         photons: 20_000,
         accel: "kdtree".into(),
         fingerprint: caustic::job::fingerprint(&scene, AccelKind::KdTree, ""),
+        output: Default::default(),
+        shard: None,
     };
     write_checkpoint(&path, &preview.accumulation, &meta).unwrap();
     let back = read_checkpoint(&path).unwrap();

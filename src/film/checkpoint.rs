@@ -18,21 +18,37 @@
 //! `caustic.width`, `caustic.height`, `caustic.spp`, `caustic.seed`,
 //! `caustic.photons`, `caustic.accel` and `caustic.fingerprint` (all text;
 //! the fingerprint is a SHA-256 of the scene and every setting that changes
-//! the samples, see `job::fingerprint`). The file is written
-//! atomically (temporary file, fsync, rename), like the images.
+//! the samples, see `job::fingerprint`), `caustic.tonemap` and
+//! `caustic.exposure` (display settings, so that a merge writes the same
+//! PNG), and in a **partial** (one or more shards of a split render, see
+//! [`super::shard`]) `caustic.shard.mode` (`tiles` or `samples`),
+//! `caustic.shard.count` and `caustic.shard.indices` (such as `2` or
+//! `0-3,5`). In a tiles partial the pixels of other shards hold zeros; in
+//! a samples partial `samples.taken` is the next sample index (the shard's
+//! samples start at its range's first index) and the sums hold the shard's
+//! samples only. The file is written atomically (temporary file, fsync,
+//! rename), like the images. Files of the previous format,
+//! `caustic-checkpoint-2` (no display or shard attributes), are still read.
 
 use super::accum::Accumulation;
 use super::output::{write_atomically, OutputError};
+use super::shard::{ShardMode, ShardSet};
+use super::tonemap::{OutputSettings, ToneMap};
 use crate::math::Vec3;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Value of the `caustic.format` attribute; bumped when the layout changes.
-pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-2";
+pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-3";
+
+/// The previous format, still read: the same channels, without the display
+/// and shard attributes (its files are whole renders with default display
+/// settings).
+pub const CHECKPOINT_FORMAT_2: &str = "caustic-checkpoint-2";
 
 /// What a checkpoint records besides the per-pixel state: what a resume
 /// needs to continue the same render, and to refuse a different one.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CheckpointMeta {
     /// Image width.
     pub width: u32,
@@ -49,6 +65,11 @@ pub struct CheckpointMeta {
     pub accel: String,
     /// Fingerprint of the scene and the effective settings (hex SHA-256).
     pub fingerprint: String,
+    /// Tone map and exposure of the render's PNG (display only, not in the
+    /// fingerprint).
+    pub output: OutputSettings,
+    /// The shards a partial holds; `None` for a whole render's checkpoint.
+    pub shard: Option<ShardSet>,
 }
 
 /// A checkpoint read back.
@@ -112,7 +133,11 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
     channels.push(AnyChannel::new(CONVERGED, FlatSamples::U32(converged)));
 
     let mut attributes = LayerAttributes::default();
-    let fields = [
+    let tone = match meta.output.tone_map {
+        ToneMap::Aces => "aces",
+        ToneMap::Clamp => "clamp",
+    };
+    let mut fields = vec![
         ("caustic.format", CHECKPOINT_FORMAT.to_string()),
         ("caustic.width", meta.width.to_string()),
         ("caustic.height", meta.height.to_string()),
@@ -121,7 +146,15 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
         ("caustic.photons", meta.photons.to_string()),
         ("caustic.accel", meta.accel.clone()),
         ("caustic.fingerprint", meta.fingerprint.clone()),
+        ("caustic.tonemap", tone.to_string()),
+        // Debug output of f32 is the shortest text that round-trips.
+        ("caustic.exposure", format!("{:?}", meta.output.exposure)),
     ];
+    if let Some(set) = &meta.shard {
+        fields.push(("caustic.shard.mode", set.mode.name().to_string()));
+        fields.push(("caustic.shard.count", set.count.to_string()));
+        fields.push(("caustic.shard.indices", set.indices_text()));
+    }
     for (key, value) in fields {
         // Only ASCII is written (numbers, hex, accelerator names), which EXR text accepts.
         let value = Text::new_or_none(&value).unwrap_or_else(|| Text::from("?"));
@@ -139,6 +172,32 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
     })
 }
 
+/// Reads only the header of a checkpoint or partial: its settings, checked
+/// (format, attributes, size within the image limits), without the pixels.
+pub fn read_checkpoint_meta(path: &Path) -> Result<CheckpointMeta, CheckpointError> {
+    read_header(path).map(|(meta, _)| meta)
+}
+
+fn read_header(path: &Path) -> Result<(CheckpointMeta, exr::meta::header::Header), CheckpointError> {
+    let invalid = |problem: String| CheckpointError::Invalid {
+        path: path.to_path_buf(),
+        problem,
+    };
+    let header_meta = exr::meta::MetaData::read_from_file(path, false).map_err(|cause| CheckpointError::Exr {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let header = match header_meta.headers.as_slice() {
+        [h] => h.clone(),
+        hs => return Err(invalid(format!("{} layers, expected 1", hs.len()))),
+    };
+    let meta = parse_meta(&header.own_attributes.other).map_err(invalid)?;
+    if let Err(e) = crate::limits::check_image_limits(meta.width, meta.height, meta.spp) {
+        return Err(invalid(format!("recorded image size: {e}")));
+    }
+    Ok((meta, header))
+}
+
 /// Reads a checkpoint written by [`write_checkpoint`]. The header is read and
 /// checked first (format, size within the image limits, channel types), so a
 /// hostile file cannot make the reader allocate more than its stated size.
@@ -152,15 +211,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         path: path.to_path_buf(),
         cause,
     };
-    let header_meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_error)?;
-    let header = match header_meta.headers.as_slice() {
-        [h] => h,
-        hs => return Err(invalid(format!("{} layers, expected 1", hs.len()))),
-    };
-    let meta = parse_meta(&header.own_attributes.other).map_err(invalid)?;
-    if let Err(e) = crate::limits::check_image_limits(meta.width, meta.height, meta.spp) {
-        return Err(invalid(format!("recorded image size: {e}")));
-    }
+    let (meta, header) = read_header(path)?;
     let size = (meta.width as usize, meta.height as usize);
     if header.layer_size.0 != size.0 || header.layer_size.1 != size.1 || header.deep {
         return Err(invalid(format!(
@@ -235,6 +286,9 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         converged: converged.into_iter().map(|c| c == 1).collect(),
     };
     accumulation.validate(meta.spp).map_err(invalid)?;
+    if let Some(set) = &meta.shard {
+        set.validate(&accumulation, meta.spp).map_err(invalid)?;
+    }
     Ok(Checkpoint { meta, accumulation })
 }
 
@@ -255,9 +309,43 @@ fn parse_meta(
             .map_err(|_| format!("attribute {key} = {value:?} is not a valid number"))
     }
     let format = text("caustic.format")?;
-    if format != CHECKPOINT_FORMAT {
-        return Err(format!("format {format:?}, this caustic reads {CHECKPOINT_FORMAT:?}"));
+    if format != CHECKPOINT_FORMAT && format != CHECKPOINT_FORMAT_2 {
+        return Err(format!(
+            "format {format:?}, this caustic reads {CHECKPOINT_FORMAT:?} and {CHECKPOINT_FORMAT_2:?}"
+        ));
     }
+    let current = format == CHECKPOINT_FORMAT;
+    let has = |key: &str| attributes.keys().any(|k| *k == *key);
+    let output = if current {
+        let tone_map = match text("caustic.tonemap")?.as_str() {
+            "aces" => ToneMap::Aces,
+            "clamp" => ToneMap::Clamp,
+            other => return Err(format!("attribute caustic.tonemap = {other:?} is not aces or clamp")),
+        };
+        let exposure: f32 = number("caustic.exposure", text("caustic.exposure")?)?;
+        if !exposure.is_finite() {
+            return Err(format!("attribute caustic.exposure = {exposure} is not finite"));
+        }
+        OutputSettings { tone_map, exposure }
+    } else {
+        OutputSettings::default()
+    };
+    let shard = if current && has("caustic.shard.mode") {
+        let mode_text = text("caustic.shard.mode")?;
+        let mode = ShardMode::from_name(&mode_text)
+            .ok_or_else(|| format!("attribute caustic.shard.mode = {mode_text:?} is not tiles or samples"))?;
+        let count: u32 = number("caustic.shard.count", text("caustic.shard.count")?)?;
+        if count == 0 || count > super::shard::MAX_SHARDS {
+            return Err(format!(
+                "attribute caustic.shard.count = {count} is not in 1..={}",
+                super::shard::MAX_SHARDS
+            ));
+        }
+        let indices = ShardSet::parse_indices(&text("caustic.shard.indices")?, count)?;
+        Some(ShardSet { mode, count, indices })
+    } else {
+        None
+    };
     Ok(CheckpointMeta {
         width: number("caustic.width", text("caustic.width")?)?,
         height: number("caustic.height", text("caustic.height")?)?,
@@ -266,6 +354,8 @@ fn parse_meta(
         photons: number("caustic.photons", text("caustic.photons")?)?,
         accel: text("caustic.accel")?,
         fingerprint: text("caustic.fingerprint")?,
+        output,
+        shard,
     })
 }
 
@@ -292,6 +382,11 @@ mod tests {
             photons: 12_345,
             accel: "kdtree".into(),
             fingerprint: "ab".repeat(32),
+            output: OutputSettings {
+                tone_map: ToneMap::Clamp,
+                exposure: 0.1,
+            },
+            shard: None,
         };
         (a, meta)
     }
@@ -318,6 +413,37 @@ mod tests {
         for (i, p) in film.pixels.iter().enumerate() {
             assert_eq!(rgb.layer_data.channel_data.pixels[i], p.to_array());
         }
+    }
+
+    #[test]
+    fn partials_round_trip_and_are_checked_against_their_shards() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.exr");
+        let set = ShardSet {
+            mode: ShardMode::Tiles,
+            count: 3,
+            indices: vec![0, 2],
+        };
+        let mut a = Accumulation::new(20, 9);
+        for (i, owned) in set.pixel_mask(20, 9).into_iter().enumerate() {
+            if owned {
+                a.sum[i] = Vec3::splat(i as f32 * 0.1);
+                a.taken[i] = 4;
+                a.kept[i] = 4;
+            }
+        }
+        let (_, mut meta) = sample();
+        (meta.width, meta.height, meta.shard) = (20, 9, Some(set.clone()));
+        write_checkpoint(&path, &a, &meta).unwrap();
+        let c = read_checkpoint(&path).unwrap();
+        assert_eq!(c.meta, meta);
+        assert_eq!(c.accumulation, a);
+        // A pixel of shard 1 holding samples is refused.
+        let i = set.pixel_mask(20, 9).iter().position(|&m| !m).unwrap();
+        a.taken[i] = 1;
+        write_checkpoint(&path, &a, &meta).unwrap();
+        let e = read_checkpoint(&path).unwrap_err().to_string();
+        assert!(e.contains("belongs to another shard"), "{e}");
     }
 
     #[test]

@@ -1,17 +1,22 @@
 //! The film: a linear HDR image the integrator fills, the tone mapping that
 //! turns it into display values, the (atomic) PNG / EXR writers, and the
-//! accumulation buffer with its checkpoint files (interrupt and resume).
+//! accumulation buffer with its checkpoint files (interrupt and resume), and
+//! the shards of a split render with their merge.
 
 pub mod accum;
 pub mod checkpoint;
 pub mod output;
+pub mod shard;
 pub mod tonemap;
 
 use crate::math::Vec3;
 
 pub use accum::Accumulation;
-pub use checkpoint::{read_checkpoint, write_checkpoint, Checkpoint, CheckpointError, CheckpointMeta};
+pub use checkpoint::{
+    read_checkpoint, read_checkpoint_meta, write_checkpoint, Checkpoint, CheckpointError, CheckpointMeta,
+};
 pub use output::{check_writable, write_exr, write_exr_with, write_png, OutputError};
+pub use shard::{ShardId, ShardMode, ShardSet};
 pub use tonemap::{aces_fitted, srgb_oetf, tonemap_to_srgb8, OutputSettings, ToneMap};
 
 /// A linear HDR image, row-major from the top-left pixel, one RGB radiance

@@ -15,7 +15,7 @@ pub mod whitted;
 
 pub use plan::RenderPlan;
 pub use render::{
-    render, render_progressive, render_with_control, render_with_photons, CheckpointHook, RenderControl, RenderOutput,
-    RenderStats,
+    photon_map_from, planned_photons, render, render_progressive, render_with_control, render_with_photons,
+    render_with_traced, CheckpointHook, RenderControl, RenderOutput, RenderStats,
 };
 pub use whitted::{RayCounts, Whitted};

@@ -14,7 +14,10 @@
 //! any pixel boundary; pixels never hold part of a sample.
 
 use super::path::PathTracer;
-use super::photon::{photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache};
+use super::photon::{
+    build_photon_map, photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache,
+    TracedPhotons,
+};
 use super::plan::{PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
@@ -203,6 +206,18 @@ struct PassWork {
 /// Runs the photon pass when `plan` asks for it: deterministic for any
 /// thread count, so a resumed render re-runs it rather than storing it.
 pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> Option<(PhotonMap, PhotonStats)> {
+    let (count, precompute) = photon_work(plan)?;
+    Some(photon_pass_with(
+        scene,
+        accel,
+        count,
+        precompute.as_ref(),
+        plan.keep_photon_positions,
+    ))
+}
+
+/// The photons `plan` emits and its precompute, when it runs the photon pass.
+fn photon_work(plan: &RenderPlan) -> Option<(u64, Option<Precompute>)> {
     match plan.photons {
         PhotonPlan::Run {
             count,
@@ -223,16 +238,31 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
                     plan.width as u64 * plan.height as u64,
                 )),
             };
-            Some(photon_pass_with(
-                scene,
-                accel,
-                count,
-                precompute.as_ref(),
-                plan.keep_photon_positions,
-            ))
+            Some((count, precompute))
         }
         _ => None,
     }
+}
+
+/// Photons `plan` emits, when it runs the photon pass.
+pub fn planned_photons(plan: &RenderPlan) -> Option<u64> {
+    photon_work(plan).map(|(count, _)| count)
+}
+
+/// The map `plan` would trace, built from photons traced beforehand (a
+/// photon file: the same map, so the same image). `None` when the plan
+/// runs no photon pass.
+///
+/// # Panics
+/// If `traced` lacks the sites the plan's precompute needs (photon files
+/// always hold them).
+pub fn photon_map_from(traced: TracedPhotons, plan: &RenderPlan) -> Option<(PhotonMap, PhotonStats)> {
+    let (_, precompute) = photon_work(plan)?;
+    Some(build_photon_map(
+        traced,
+        precompute.as_ref(),
+        plan.keep_photon_positions,
+    ))
 }
 
 /// Renders `scene` as `plan` says, on the current rayon pool: the photon
@@ -264,14 +294,34 @@ pub fn render_with_control(
     start: Accumulation,
     control: &RenderControl,
 ) -> RenderOutput {
+    render_with_traced(scene, accel, plan, None, start, control)
+}
+
+/// Like [`render_with_control`], with the photons traced beforehand when
+/// `traced` is given (a photon file; see [`photon_map_from`]).
+///
+/// # Panics
+/// As [`render_with_control`] and [`photon_map_from`].
+pub fn render_with_traced(
+    scene: &Scene,
+    accel: &dyn Accel,
+    plan: &RenderPlan,
+    traced: Option<TracedPhotons>,
+    start: Accumulation,
+    control: &RenderControl,
+) -> RenderOutput {
     let begin = Instant::now();
     let spp = plan.spp.max(1);
     let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
-    // Nothing to render: no photon pass either.
-    let photons = if control.cancelled() || start.taken_range().0 >= limit {
+    // Nothing to render (every pixel still sampling is at the limit, or
+    // none is: converged, or another shard's): no photon pass either.
+    let photons = if control.cancelled() || start.active_level().is_none_or(|level| level >= limit) {
         None
     } else {
-        photon_pass_for(scene, accel, plan)
+        match traced {
+            Some(traced) => photon_map_from(traced, plan),
+            None => photon_pass_for(scene, accel, plan),
+        }
     };
     let (map, photon_stats) = match photons {
         Some((map, stats)) => (Some(Arc::new(map)), Some(stats)),

@@ -16,9 +16,41 @@ use sha2::{Digest, Sha256};
 /// materials, lights, objects, mesh geometry), the render settings except
 /// the display-only tone map and exposure, the accelerator and its options
 /// (`accel_options`: e.g. Embree's build quality; hits can differ in the
-/// last bits between backends), the checkpoint format and the crate
-/// version. Thread count is not included: it never changes the image.
+/// last bits between backends), the checkpoint layout and the crate
+/// version. Thread count and the shard a process renders are not included:
+/// they never change a sample, and every shard of a render shares its
+/// fingerprint.
 pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
+    fingerprint_of(scene, &scene.settings, None, accel, accel_options)
+}
+
+/// Hex SHA-256 of everything the traced photons depend on
+/// (`caustic photons`, `--photon-map`): [`fingerprint`]'s fields with the
+/// image size, samples per pixel, sampler and adaptive sampling left out
+/// (the trace never reads them; the map's precompute, which depends on the
+/// image size, runs when a render loads the photons), and a purpose field
+/// so that it never equals a render's fingerprint.
+pub fn photon_fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
+    let defaults = RenderSettings::default();
+    let settings = RenderSettings {
+        width: defaults.width,
+        height: defaults.height,
+        spp: defaults.spp,
+        noise_threshold: None,
+        min_spp: defaults.min_spp,
+        sampler: None,
+        ..scene.settings.clone()
+    };
+    fingerprint_of(scene, &settings, Some("photons"), accel, accel_options)
+}
+
+fn fingerprint_of(
+    scene: &Scene,
+    settings: &RenderSettings,
+    purpose: Option<&str>,
+    accel: AccelKind,
+    accel_options: &str,
+) -> String {
     let mut h = Sha256::new();
     let mut field = |name: &str, bytes: &[u8]| {
         // Length-prefixed so that no two field sequences hash alike.
@@ -27,13 +59,19 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
         h.update((bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     };
-    field("format", crate::film::checkpoint::CHECKPOINT_FORMAT.as_bytes());
+    // The per-pixel layout the samples are kept in; format 3 only added
+    // header attributes, so its fingerprints equal format 2's (whose
+    // checkpoints still resume).
+    field("format", crate::film::checkpoint::CHECKPOINT_FORMAT_2.as_bytes());
     field("version", env!("CARGO_PKG_VERSION").as_bytes());
+    if let Some(purpose) = purpose {
+        field("purpose", purpose.as_bytes());
+    }
     // Debug output of f32 is the shortest text that round-trips, so it
     // identifies values exactly.
     let settings = RenderSettings {
         output: crate::film::OutputSettings::default(),
-        ..scene.settings.clone()
+        ..settings.clone()
     };
     field("settings", format!("{settings:?}").as_bytes());
     field("camera", format!("{:?}", scene.camera).as_bytes());
@@ -55,10 +93,16 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
 /// What differs between a checkpoint's recorded settings and this run's, in
 /// words (the fingerprint alone cannot say).
 pub fn differences(then: &CheckpointMeta, now: &CheckpointMeta) -> String {
+    differences_between(then, "in the checkpoint", now, "now")
+}
+
+/// What differs between two recorded settings, each side described by its
+/// label ("in a.exr", "now").
+pub fn differences_between(then: &CheckpointMeta, then_label: &str, now: &CheckpointMeta, now_label: &str) -> String {
     let mut diffs = Vec::new();
     let mut field = |name: &str, a: String, b: String| {
         if a != b {
-            diffs.push(format!("{name} {a} in the checkpoint, {b} now"));
+            diffs.push(format!("{name} {a} {then_label}, {b} {now_label}"));
         }
     };
     field("width", then.width.to_string(), now.width.to_string());

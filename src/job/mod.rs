@@ -12,14 +12,21 @@
 
 pub mod fingerprint;
 pub mod interrupt;
+pub mod merge;
+pub mod photons;
+pub mod shard_env;
 
 pub use fingerprint::fingerprint;
 pub use interrupt::Interrupt;
+pub use merge::{merge_partials, MergeReport, MergeRequest};
+pub use photons::{trace_to_file, PhotonsReport, PhotonsRequest};
+pub use shard_env::{parse_shard_arg, shard_from_env};
 
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, AccelStats};
-use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, OutputError};
+use crate::film::{self, Accumulation, CheckpointError, CheckpointMeta, Film, OutputError, ShardMode, ShardSet};
 use crate::geometry::TriangleTest;
 use crate::integrator::lint;
+use crate::integrator::photon::TracedPhotons;
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
 use crate::math::SamplerKind;
 use crate::scene::{self, IntegratorKind, Scene, SceneError};
@@ -142,6 +149,14 @@ pub struct RenderRequest {
     /// (the accelerator build and the photon pass included) and write the
     /// image so far.
     pub time_limit: Option<Duration>,
+    /// Render only this shard (a [`ShardSet::single`]) and write it as a
+    /// partial to `checkpoint` (required then), saved periodically like a
+    /// checkpoint. When resuming a partial, `None` takes the partial's shard.
+    pub shard: Option<ShardSet>,
+    /// Photons traced beforehand (`caustic photons`) to build the caustic
+    /// map from instead of tracing it; refused unless its fingerprint is
+    /// this render's.
+    pub photon_map: Option<PathBuf>,
 }
 
 impl RenderRequest {
@@ -161,6 +176,8 @@ impl RenderRequest {
             resume: None,
             debug: None,
             time_limit: None,
+            shard: None,
+            photon_map: None,
         }
     }
 }
@@ -224,6 +241,10 @@ pub struct RenderJob {
     pub debug: Option<DebugView>,
     /// Time budget of the whole job.
     pub time_limit: Option<Duration>,
+    /// The shard this job renders (its partial is the checkpoint file).
+    pub shard: Option<ShardSet>,
+    /// Photons loaded from a photon file, checked against this render.
+    pub photons: Option<TracedPhotons>,
 }
 
 /// Reported once the accelerator is built, before the first sample.
@@ -279,8 +300,10 @@ pub struct JobReport {
     pub render_time: Duration,
     /// The files written, as shown to the user.
     pub written: Vec<String>,
-    /// Samples of the whole render.
+    /// Samples of the whole render (of the shard, for a shard).
     pub total_samples: u64,
+    /// The shard rendered, if any.
+    pub shard: Option<ShardSet>,
 }
 
 impl JobReport {
@@ -294,9 +317,10 @@ impl JobReport {
         self.output.complete
     }
 
-    /// Samples taken so far, resumed ones included.
+    /// Samples taken so far, resumed ones included (a shard's own only).
     pub fn samples_done(&self) -> u64 {
-        self.output.accumulation.samples_taken()
+        let offset = sample_offset(self.shard.as_ref(), &self.plan);
+        self.output.accumulation.samples_taken() - offset
     }
 }
 
@@ -325,6 +349,7 @@ impl RenderJob {
             }
         }
         overrides.apply(&mut scene, &request.scene)?;
+        let shard = shard_of(request, resumed.as_ref().map(|c| &c.meta), &scene)?;
         let accel = accel.unwrap_or_else(AccelKind::default_kind);
         let accel_options = AccelOptions {
             triangle_test: scene.settings.triangle_test,
@@ -332,7 +357,13 @@ impl RenderJob {
             embree_robust: request.embree_robust,
         };
         let checkpoint_path = request.checkpoint.clone().or_else(|| request.resume.clone());
-        let meta = checkpoint_meta(&scene, accel, &accel_options);
+        let mut meta = checkpoint_meta(&scene, accel, &accel_options);
+        meta.shard = shard.clone();
+        if shard.is_some() && checkpoint_path.is_none() {
+            return Err(JobError::Invalid(
+                "a shard needs a file to write its partial to (-o PART.exr)".to_string(),
+            ));
+        }
         if let (Some(c), Some(path)) = (&resumed, &request.resume) {
             if c.meta.fingerprint != meta.fingerprint {
                 return Err(JobError::Invalid(format!(
@@ -342,14 +373,22 @@ impl RenderJob {
                 )));
             }
         }
+        let photons = match &request.photon_map {
+            Some(path) => Some(photons::load_for(path, &scene, accel, &accel_options)?),
+            None => None,
+        };
         // Fail before hours of rendering, not after.
         for out in request.png.iter().chain(&request.exr).chain(&checkpoint_path) {
             film::check_writable(out)?;
         }
-        let start = match resumed {
+        let (w, h, spp) = (scene.settings.width, scene.settings.height, scene.settings.spp);
+        let mut start = match resumed {
             Some(c) => c.accumulation,
-            None => Accumulation::new(scene.settings.width, scene.settings.height),
+            None => Accumulation::new(w, h),
         };
+        if let Some(set) = &shard {
+            set.prepare_for_render(&mut start, spp);
+        }
         Ok(Self {
             source: request.scene.clone(),
             accel,
@@ -362,6 +401,8 @@ impl RenderJob {
             resumed_from: request.resume.clone(),
             debug: request.debug,
             time_limit: request.time_limit,
+            shard,
+            photons,
             scene,
         })
     }
@@ -382,6 +423,8 @@ impl RenderJob {
             resumed_from: None,
             debug: None,
             time_limit: None,
+            shard: None,
+            photons: None,
         }
     }
 
@@ -409,36 +452,54 @@ impl RenderJob {
         let stats = accel.stats();
         let plan = self.plan();
         let st = &self.scene.settings;
-        let total_samples = st.width as u64 * st.height as u64 * st.spp as u64;
+        let shard = self.shard.clone();
+        let total_samples = match &shard {
+            Some(set) => set.total_samples(st.width, st.height, st.spp),
+            None => st.width as u64 * st.height as u64 * st.spp as u64,
+        };
+        // Samples mode starts every pixel at its range's first index.
+        let offset = sample_offset(shard.as_ref(), &plan);
         let warnings = lint::warnings(&self.scene);
         (hooks.started)(&JobStart {
             accel: &stats,
             plan: &plan,
-            resumed_samples: self.start.samples_taken(),
+            resumed_samples: self.start.samples_taken() - offset,
             total_samples,
             warnings: &warnings,
         });
         let checkpoint = self.checkpoint.as_ref();
+        let for_file = |acc: &Accumulation| match &shard {
+            Some(set) => set.for_file(acc),
+            None => acc.clone(),
+        };
         let save = |acc: &Accumulation| {
             if let Some((path, meta)) = checkpoint {
-                if let Err(e) = film::write_checkpoint(path, acc, meta) {
+                if let Err(e) = film::write_checkpoint(path, &for_file(acc), meta) {
                     (hooks.warn)(&format!("checkpoint not saved (the render goes on): {e}"));
                 }
             }
         };
+        let progress = |done: u64, _total: u64| (hooks.progress)(done - offset, total_samples);
         let control = integrator::RenderControl {
             cancel: hooks.cancel,
-            sample_limit: None,
+            sample_limit: shard
+                .as_ref()
+                .filter(|set| set.mode == ShardMode::Samples)
+                .map(|set| set.last_sample(st.spp)),
             checkpoint: checkpoint.map(|_| integrator::CheckpointHook {
                 every: self.checkpoint_every,
                 save: &save,
             }),
-            progress: hooks.progress,
+            progress: &progress,
             deadline: self.time_limit.map(|t| Instant::now() + t),
         };
         let begin = Instant::now();
-        let mut output = integrator::render_with_control(&self.scene, accel, &plan, self.start, &control);
-        if output.accumulation.samples_taken() == 0 {
+        let mut output = integrator::render_with_traced(&self.scene, accel, &plan, self.photons, self.start, &control);
+        if let Some(set) = &shard {
+            output.complete = set.is_complete(&output.accumulation, st.spp);
+            output.timed_out &= !output.complete;
+        }
+        if output.accumulation.samples_taken() == offset && !output.complete {
             // Stopped before the first sample: keep whatever files are there.
             return Err(JobError::StoppedBeforeFirstSample);
         }
@@ -459,17 +520,15 @@ impl RenderJob {
             written.push(p.display().to_string());
         }
         if let Some(p) = &self.exr {
-            // Where the work went: each pixel's estimated relative error and
-            // its sample count, beside the image.
-            let acc = &output.accumulation;
-            let error = acc.error_map();
-            let spp: Vec<f32> = acc.taken.iter().map(|&t| t as f32).collect();
-            film::write_exr_with(p, &output.film, &[("error", &error), ("spp", &spp)])?;
+            write_exr_output(p, &output.film, &output.accumulation)?;
             written.push(p.display().to_string());
         }
         if let Some((path, meta)) = checkpoint {
-            film::write_checkpoint(path, &output.accumulation, meta)?;
-            written.push(format!("{} (checkpoint)", path.display()));
+            film::write_checkpoint(path, &for_file(&output.accumulation), meta)?;
+            written.push(match &shard {
+                Some(set) => format!("{} (partial: {set})", path.display()),
+                None => format!("{} (checkpoint)", path.display()),
+            });
         }
         Ok(JobReport {
             accel: stats,
@@ -478,8 +537,85 @@ impl RenderJob {
             render_time: begin.elapsed(),
             written,
             total_samples,
+            shard,
         })
     }
+}
+
+/// Writes the linear EXR of a render: the film and, beside it, where the
+/// work went: each pixel's estimated relative error and its sample count.
+pub fn write_exr_output(path: &Path, film: &Film, acc: &Accumulation) -> Result<(), OutputError> {
+    let error = acc.error_map();
+    let spp: Vec<f32> = acc.taken.iter().map(|&t| t as f32).collect();
+    film::write_exr_with(path, film, &[("error", &error), ("spp", &spp)])
+}
+
+/// Samples a samples-mode shard's accumulation counts before its first:
+/// every pixel starts at its range's first index.
+fn sample_offset(shard: Option<&ShardSet>, plan: &RenderPlan) -> u64 {
+    match shard {
+        Some(set) if set.mode == ShardMode::Samples => {
+            plan.width as u64 * plan.height as u64 * set.first_sample(plan.spp) as u64
+        }
+        _ => 0,
+    }
+}
+
+/// The shard a job renders: the request's, checked against a resumed
+/// partial's (which is the default), and refused with adaptive sampling
+/// or too few samples to split.
+fn shard_of(
+    request: &RenderRequest,
+    resumed: Option<&CheckpointMeta>,
+    scene: &Scene,
+) -> Result<Option<ShardSet>, JobError> {
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+    let shard = match (resumed.map(|m| &m.shard), &request.shard) {
+        (None, shard) => shard.clone(),
+        (Some(None), None) => None,
+        (Some(None), Some(_)) => {
+            return Err(JobError::Invalid(format!(
+                "{}: a checkpoint of a whole render, not of a shard: resume it without --shard",
+                path(&request.resume)
+            )))
+        }
+        (Some(Some(theirs)), ours) => {
+            if let Some(ours) = ours.as_ref().filter(|o| *o != theirs) {
+                return Err(JobError::Invalid(format!(
+                    "{}: the partial holds {theirs}, not {ours}",
+                    path(&request.resume)
+                )));
+            }
+            if theirs.indices.len() != 1 {
+                return Err(JobError::Invalid(format!(
+                    "{}: a merged partial ({theirs}) is complete and cannot be resumed; merge it with caustic merge",
+                    path(&request.resume)
+                )));
+            }
+            Some(theirs.clone())
+        }
+    };
+    let Some(set) = shard else { return Ok(None) };
+    let st = &scene.settings;
+    if st.noise_threshold.is_some() {
+        return Err(JobError::Invalid(format!(
+            "{}: adaptive sampling (--noise-threshold or the scene's noise_threshold) cannot be split into shards: \
+             a pixel's stopping decision reads its neighbours, which other shards render",
+            request.scene.display()
+        )));
+    }
+    if set.mode == ShardMode::Samples && set.count > st.spp {
+        return Err(JobError::Invalid(format!(
+            "{set}: splitting by samples needs at least {} samples per pixel, one per shard (the render has {})",
+            set.count, st.spp
+        )));
+    }
+    if request.debug.is_some() {
+        return Err(JobError::Invalid(
+            "--debug draws over a whole image: it cannot be used with --shard".to_string(),
+        ));
+    }
+    Ok(Some(set))
 }
 
 /// What a checkpoint of this render records (its fingerprint included).
@@ -493,5 +629,7 @@ pub fn checkpoint_meta(scene: &Scene, accel: AccelKind, options: &AccelOptions) 
         photons: st.photons.count,
         accel: accel.name().to_string(),
         fingerprint: fingerprint(scene, accel, &options.fingerprint_text(accel)),
+        output: st.output,
+        shard: None,
     }
 }

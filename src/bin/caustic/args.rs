@@ -2,6 +2,7 @@
 //! the groups they share.
 
 use caustic::accel::{AccelKind, AccelOptions, TriangleTest};
+use caustic::film::ShardMode;
 use caustic::math::SamplerKind;
 use caustic::scene::{IntegratorKind, Scene};
 use clap::{Args, ValueEnum};
@@ -219,8 +220,102 @@ pub struct RenderArgs {
     /// file unless --checkpoint names another.
     #[arg(long)]
     pub resume: Option<PathBuf>,
+    /// Render only shard I of N (0-based, e.g. 2/4) and write it as a partial
+    /// (an EXR of per-pixel sums, merged by `caustic merge`) to -o, saved every
+    /// --checkpoint-every seconds; `auto` reads the index (and count) from a
+    /// Slurm array (SLURM_ARRAY_TASK_*) or a Kubernetes Indexed Job
+    /// (JOB_COMPLETION_INDEX, with --shard-count).
+    #[arg(long, value_name = "I/N|auto")]
+    pub shard: Option<String>,
+    /// How shards split the render: tiles (disjoint pixel blocks; the merge is
+    /// bit-identical to one process) or samples (disjoint sample ranges of every
+    /// pixel). Default: tiles.
+    #[arg(long, value_enum, requires = "shard")]
+    pub shard_by: Option<ShardByArg>,
+    /// Number of shards, for --shard auto where the scheduler does not say
+    /// (Kubernetes: the Job's completions).
+    #[arg(long, requires = "shard")]
+    pub shard_count: Option<u32>,
+    /// Build the caustic map from photons traced beforehand by `caustic photons`
+    /// (refused unless they are this render's: same scene, photons, seed and
+    /// accelerator) instead of tracing them.
+    #[arg(long, value_name = "FILE")]
+    pub photon_map: Option<PathBuf>,
     #[command(flatten)]
     pub accel: AccelArgs,
+}
+
+#[derive(Args)]
+pub struct PhotonsArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// The photon file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Override the number of photons emitted.
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Override the seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Light transport algorithm (path tracing has no photon pass).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Image width: accepted so that a render's flags can be reused; the
+    /// photons do not depend on it.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (as --width).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel (as --width).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+/// How shards split a render.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ShardByArg {
+    /// Disjoint blocks of pixels per shard.
+    Tiles,
+    /// Disjoint ranges of sample indices per shard, every pixel.
+    Samples,
+}
+
+impl From<ShardByArg> for ShardMode {
+    fn from(a: ShardByArg) -> Self {
+        match a {
+            ShardByArg::Tiles => ShardMode::Tiles,
+            ShardByArg::Samples => ShardMode::Samples,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// Partials written by `caustic render --shard` (or by --partial).
+    #[arg(required = true)]
+    pub partials: Vec<PathBuf>,
+    /// PNG output (tone mapped as the scene says); needs every shard.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// EXR output (linear HDR, with error and spp channels); needs every shard.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// Write the merged shards as a new partial (any subset: tree reductions).
+    #[arg(long)]
+    pub partial: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -6,7 +6,9 @@ mod measure;
 mod render;
 mod view;
 
-use args::{BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, RenderArgs, StressArgs, ViewArgs};
+use args::{
+    BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, MergeArgs, PhotonsArgs, RenderArgs, StressArgs, ViewArgs,
+};
 use caustic::job::JobError;
 use caustic::scene::{self, Scene};
 use clap::{Parser, Subcommand};
@@ -25,6 +27,12 @@ struct Cli {
 enum Command {
     /// Render a scene file to PNG (tone mapped) and/or EXR (linear HDR).
     Render(RenderArgs),
+    /// Merge the partials of a render split with `render --shard` into one
+    /// image (every shard) or into a new partial (any subset).
+    Merge(MergeArgs),
+    /// Trace a scene's caustic photons once into a file that renders (every
+    /// shard of one) load with --photon-map instead of tracing them.
+    Photons(PhotonsArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
     /// Cast seeded rays through two accelerators (default Embree and the
@@ -79,6 +87,8 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Render(args) => render::run_render(args),
+        Command::Merge(args) => render::run_merge(args),
+        Command::Photons(args) => render::run_photons(args),
         Command::Info(args) => measure::run_info(args),
         Command::Crosscheck(args) => measure::run_crosscheck(args),
         Command::Converge(args) => measure::run_converge(args),

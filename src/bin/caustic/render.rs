@@ -1,9 +1,10 @@
-//! `caustic render`: a [`RenderJob`] with a progress bar, Ctrl-C and a summary.
+//! `caustic render` (a [`RenderJob`] with a progress bar, Ctrl-C and a summary), `caustic merge` and `caustic photons`.
 
-use crate::args::{DebugView, RenderArgs};
+use crate::args::{DebugView, MergeArgs, PhotonsArgs, RenderArgs};
 use crate::{bad_input, job_failure, Failure};
 use anyhow::Context;
 use caustic::accel::AccelKind;
+use caustic::film::{self, ShardMode, ShardSet};
 use caustic::job::{self, JobError, Overrides, RenderJob, RenderRequest};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -16,7 +17,9 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             args.checkpoint_every
         )));
     }
+    let shard = shard_request(&args)?;
     let png = match (&args.output, &args.exr) {
+        _ if shard.is_some() => None,
         (Some(p), _) => Some(p.clone()),
         (None, Some(_)) => None,
         (None, None) => Some(PathBuf::from(format!(
@@ -46,7 +49,11 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         embree_robust: args.accel.backend.embree_robust,
         png,
         exr: args.exr.clone(),
-        checkpoint: args.checkpoint.clone(),
+        checkpoint: match &shard {
+            // A shard's partial is its checkpoint: -o, or the resumed file.
+            Some(_) => args.output.clone().or_else(|| args.resume.clone()),
+            None => args.checkpoint.clone(),
+        },
         checkpoint_every: Duration::from_secs_f64(args.checkpoint_every),
         resume: args.resume.clone(),
         time_limit: time_limit(args.time_limit)?,
@@ -56,6 +63,8 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
                 depth: args.debug_depth,
             },
         }),
+        shard: shard.flatten(),
+        photon_map: args.photon_map.clone(),
     };
     let job = RenderJob::prepare(&request).map_err(job_failure)?;
     let interrupt = job::Interrupt::install().context("cannot install the Ctrl-C handler")?;
@@ -64,6 +73,117 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         .build()
         .context("cannot start the worker threads")?;
     pool.install(|| render_job(job, &args, &interrupt))
+}
+
+/// The shard to render: `Some(Some(set))` for `--shard`, `Some(None)` when
+/// resuming a partial without `--shard` (its own shard is used), `None`
+/// for a whole render.
+fn shard_request(args: &RenderArgs) -> Result<Option<Option<ShardSet>>, Failure> {
+    let mode = args.shard_by.map_or(ShardMode::Tiles, ShardMode::from);
+    let shard = match &args.shard {
+        Some(text) => {
+            let var = |name: &str| std::env::var(name).ok();
+            let id = job::parse_shard_arg(text, args.shard_count, &var).map_err(|e| bad_input(anyhow::anyhow!(e)))?;
+            Some(Some(ShardSet::single(id, mode)))
+        }
+        None => match &args.resume {
+            Some(path) => {
+                let meta = film::read_checkpoint_meta(path).map_err(bad_input)?;
+                meta.shard.map(|_| None)
+            }
+            None => None,
+        },
+    };
+    if shard.is_some() {
+        if args.exr.is_some() || args.checkpoint.is_some() {
+            return Err(bad_input(anyhow::anyhow!(
+                "a shard writes only its partial (-o PART.exr), saved every --checkpoint-every seconds: \
+                 --exr and --checkpoint do not apply; merge the partials with caustic merge"
+            )));
+        }
+        let is_exr = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        if let Some(out) = args.output.as_ref().filter(|p| !is_exr(p)) {
+            return Err(bad_input(anyhow::anyhow!(
+                "-o {}: a shard writes its partial as an EXR: name it PART.exr (merge the partials into a PNG \
+                 with caustic merge)",
+                out.display()
+            )));
+        }
+        if args.output.is_none() && args.resume.is_none() {
+            return Err(bad_input(anyhow::anyhow!(
+                "--shard needs -o PART.exr: the file its partial is written to"
+            )));
+        }
+    }
+    Ok(shard)
+}
+
+/// `caustic merge`: partials into an image or a new partial.
+pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
+    let request = job::MergeRequest {
+        partials: args.partials,
+        png: args.output,
+        exr: args.exr,
+        partial: args.partial,
+    };
+    let report = job::merge_partials(&request).map_err(job_failure)?;
+    if !args.quiet {
+        let m = &report.meta;
+        if let Some(set) = &m.shard {
+            println!(
+                "merged {set}: {}×{}, {} spp, seed {}, {} samples",
+                m.width,
+                m.height,
+                m.spp,
+                m.seed,
+                report.accumulation.samples_taken()
+            );
+        }
+        println!("written: {}", report.written.join(", "));
+    }
+    Ok(())
+}
+
+/// `caustic photons`: the traced photons of a scene into a file.
+pub fn run_photons(args: PhotonsArgs) -> Result<(), Failure> {
+    let request = job::PhotonsRequest {
+        scene: args.scene.clone(),
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            seed: args.seed,
+            photons: args.photons,
+            triangle_test: args.accel.backend.triangle_test(),
+            integrator: args.integrator.map(Into::into),
+            ..Overrides::default()
+        },
+        accel: args.accel.accel.map(AccelKind::from),
+        accel_options: caustic::accel::AccelOptions {
+            embree_quality: args.accel.backend.embree_quality.name().into(),
+            embree_robust: args.accel.backend.embree_robust,
+            ..Default::default()
+        },
+        output: args.output.clone(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let report = pool.install(|| job::trace_to_file(&request)).map_err(job_failure)?;
+    if !args.quiet {
+        println!(
+            "photons: {} emitted, {} stored, {} rays, traced in {:.3} s; written {} ({:.1} MiB in {:.3} s)",
+            report.emitted,
+            report.stored,
+            report.rays,
+            report.trace_time.as_secs_f64(),
+            args.output.display(),
+            report.bytes as f64 / (1024.0 * 1024.0),
+            report.write_time.as_secs_f64()
+        );
+    }
+    Ok(())
 }
 
 /// `--time-limit SECONDS` as a duration (positive and finite).
@@ -89,6 +209,7 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
     );
     let (scene_path, resumed_from) = (job.source.clone(), job.resumed_from.clone());
     let checkpoint = job.checkpoint.as_ref().map(|(p, _)| p.clone());
+    let shard = job.shard.clone();
     let started = |start: &job::JobStart| {
         let st = start.plan;
         if !args.quiet {
@@ -102,6 +223,9 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
                 start.accel.build_time.as_secs_f64()
             );
             eprintln!("{}", start.plan);
+            if let Some(set) = &shard {
+                eprintln!("rendering {set}: {} samples", start.total_samples);
+            }
         }
         for w in start.warnings {
             eprintln!("warning: {w}");

@@ -14,12 +14,14 @@
 
 pub mod chunked;
 pub mod emit;
+pub mod file;
 pub mod gather;
 pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
 
 pub use emit::{specular_casters, Caster, PhotonTracer};
+pub use file::{read_photons, write_photons, PhotonFileError};
 pub use gather::GatherParams;
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
 pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
@@ -123,6 +125,37 @@ pub fn photon_pass_with(
     precompute: Option<&Precompute>,
     keep_positions: bool,
 ) -> (PhotonMap, PhotonStats) {
+    let traced = trace_photons(scene, accel, count, precompute.is_some());
+    build_photon_map(traced, precompute, keep_positions)
+}
+
+/// The photons of a pass as traced, before the map is built: what
+/// `caustic photons` saves and `--photon-map` loads
+/// ([`build_photon_map`] makes the same map from them either way).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TracedPhotons {
+    /// Photons emitted.
+    pub emitted: u64,
+    /// Positions of the stored photons, in emission order.
+    pub positions: Vec<[f32; 3]>,
+    /// Their packed power and direction, in the same order.
+    pub records: Vec<PhotonRecord>,
+    /// Candidate irradiance sites: each stored photon whose emission index
+    /// is a multiple of [`PRECOMPUTE_STRIDE`], in order (empty when not
+    /// collected).
+    pub sites: Vec<IrradianceSite>,
+    /// True when `sites` were collected.
+    pub has_sites: bool,
+    /// Rays cast while tracing.
+    pub rays: u64,
+    /// Wall time of the tracing (zero for photons loaded from a file).
+    pub trace_time: Duration,
+}
+
+/// Emits and traces `count` photons on the current rayon pool
+/// (deterministic for any thread count), collecting the candidate
+/// irradiance sites when `with_sites`.
+pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: bool) -> TracedPhotons {
     let start = Instant::now();
     let tracer = PhotonTracer::new(scene, accel, count);
     // A path stores at most one photon, so `count` bounds the arrays:
@@ -132,7 +165,7 @@ pub fn photon_pass_with(
     let capacity = usize::try_from(count).unwrap_or(usize::MAX);
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(capacity);
     let mut records: Vec<PhotonRecord> = Vec::with_capacity(capacity);
-    let mut sites: Vec<IrradianceSite> = if precompute.is_some() {
+    let mut sites: Vec<IrradianceSite> = if with_sites {
         Vec::with_capacity(capacity / PRECOMPUTE_STRIDE + 1)
     } else {
         Vec::new()
@@ -163,7 +196,7 @@ pub fn photon_pass_with(
                     if p.position.is_finite() && p.power.is_finite() {
                         out.positions.push(p.position.to_array());
                         out.records.push(PhotonRecord::new(p.power, p.incoming));
-                        if precompute.is_some() && i % PRECOMPUTE_STRIDE as u64 == 0 {
+                        if with_sites && i % PRECOMPUTE_STRIDE as u64 == 0 {
                             out.sites.push(IrradianceSite {
                                 position: p.position,
                                 normal: p.normal,
@@ -194,7 +227,40 @@ pub fn photon_pass_with(
     append(pending);
     positions.shrink_to_fit();
     records.shrink_to_fit();
-    let trace_time = start.elapsed();
+    TracedPhotons {
+        emitted: count,
+        positions,
+        records,
+        sites,
+        has_sites: with_sites,
+        rays,
+        trace_time: start.elapsed(),
+    }
+}
+
+/// Builds the caustic map from traced photons and, with `precompute`, the
+/// irradiance at the thinned sites (which `traced` must hold).
+///
+/// # Panics
+/// With `precompute` when `traced.has_sites` is false.
+pub fn build_photon_map(
+    traced: TracedPhotons,
+    precompute: Option<&Precompute>,
+    keep_positions: bool,
+) -> (PhotonMap, PhotonStats) {
+    assert!(
+        precompute.is_none() || traced.has_sites,
+        "the precompute needs the traced sites"
+    );
+    let TracedPhotons {
+        emitted: count,
+        positions,
+        records,
+        mut sites,
+        rays,
+        trace_time,
+        ..
+    } = traced;
     let build_start = Instant::now();
     let stored = positions.len() as u64;
     let mut map = PhotonMap::build(positions, records, keep_positions);
