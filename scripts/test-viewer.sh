@@ -91,20 +91,21 @@ awk -v r="$red" -v g="$green" 'BEGIN { exit !(r > 0.1 && g > 0.05) }' || {
 xdotool mousemove $((X + 800)) $((Y + 300))
 xdotool windowfocus --sync "$WID"
 sleep 0.5
+# overlay NAME SECONDS WHAT: after the keys just sent, wait, take NAME.png
+# and require more than 500 pixels to differ from the rendered image.
+overlay() {
+  sleep "$2"
+  shot "$OUT/$1.png"
+  local changed
+  changed=$(compare -metric AE -fuzz 10% "$OUT/render.png" "$OUT/$1.png" null: 2>&1 || true)
+  echo "pixels changed by the $3: $changed"
+  [ "${changed%%.*}" -gt 500 ] || { echo "FAIL: no $3 drawn"; exit 1; }
+}
 xdotool key p
-sleep 2
-shot "$OUT/photons.png"
-changed=$(compare -metric AE -fuzz 10% "$OUT/render.png" "$OUT/photons.png" null: 2>&1 || true)
-echo "pixels changed by the photon overlay: $changed"
-[ "${changed%%.*}" -gt 500 ] || { echo "FAIL: 'p' did not draw the photon cloud"; exit 1; }
-
+overlay photons 2 "photon overlay ('p')"
 xdotool key p
 xdotool key k
-sleep 3
-shot "$OUT/kdtree.png"
-boxes=$(compare -metric AE -fuzz 10% "$OUT/render.png" "$OUT/kdtree.png" null: 2>&1 || true)
-echo "pixels changed by the KD-tree boxes: $boxes"
-[ "${boxes%%.*}" -gt 500 ] || { echo "FAIL: 'k' did not draw the KD-tree boxes"; exit 1; }
+overlay kdtree 3 "KD-tree boxes ('k')"
 
 kill -0 "$VIEW_PID" || { echo "FAIL: the viewer exited"; cat "$OUT/view.log"; exit 1; }
 echo "viewer window test passed (screenshots in $OUT)"

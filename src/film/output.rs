@@ -111,7 +111,8 @@ pub(crate) fn write_atomically(
         .tempfile_in(&dir)
         .map_err(io("creating a temporary file in the output directory"))?;
     {
-        let mut buffered = BufWriter::new(tmp.as_file());
+        // 1 MiB: multi-GiB files (photon maps) in few system calls.
+        let mut buffered = BufWriter::with_capacity(1 << 20, tmp.as_file());
         write(&mut buffered)?;
         buffered.flush().map_err(io("writing"))?;
     }

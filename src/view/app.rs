@@ -227,15 +227,6 @@ impl ViewerApp {
 
     fn scene_files(&mut self, ui: &mut egui::Ui) {
         let current = self.core.edit.path.clone();
-        let dir = current.parent().map(Path::to_path_buf).unwrap_or_default();
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .map(|r| {
-                r.filter_map(|e| e.ok().map(|e| e.path()))
-                    .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-                    .collect()
-            })
-            .unwrap_or_default();
-        files.sort();
         let name = |p: &Path| {
             p.file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
@@ -244,9 +235,10 @@ impl ViewerApp {
         egui::ComboBox::from_label("scene")
             .selected_text(name(&current))
             .show_ui(ui, |ui| {
-                for f in &files {
-                    if ui.selectable_label(*f == current, name(f)).clicked() && *f != current {
-                        chosen = Some(f.clone());
+                // Listed only while the menu is open, not every frame.
+                for f in scene_files_beside(&current) {
+                    if ui.selectable_label(f == current, name(&f)).clicked() && f != current {
+                        chosen = Some(f);
                     }
                 }
             });
@@ -569,6 +561,20 @@ fn colour_edit(ui: &mut egui::Ui, label: &str, c: &mut Vec3A) {
         }
         ui.label(label);
     });
+}
+
+/// The `.toml` files in the folder of `scene`, sorted.
+fn scene_files_beside(scene: &Path) -> Vec<PathBuf> {
+    let dir = scene.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map(|r| {
+            r.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    files
 }
 
 /// `caustic — <scene file>`.

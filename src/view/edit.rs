@@ -188,10 +188,14 @@ impl EditableScene {
 
     /// The scene file's text with every edit written in.
     pub fn to_toml(&self) -> String {
+        self.edited_doc().to_string()
+    }
+
+    fn edited_doc(&self) -> DocumentMut {
         let mut doc = self.doc.clone();
         self.write_camera(&mut doc);
         self.write_edits(&mut doc);
-        doc.to_string()
+        doc
     }
 
     /// The scene file's text with only the camera changed (to the view's).
@@ -244,9 +248,7 @@ impl EditableScene {
     /// Writes the edited scene to `path` atomically; `caustic render path`
     /// then renders what the viewer shows.
     pub fn save(&self, path: &Path) -> Result<(), OutputError> {
-        let mut doc = self.doc.clone();
-        self.write_camera(&mut doc);
-        self.write_edits(&mut doc);
+        let mut doc = self.edited_doc();
         rebase_mesh_files(&mut doc, &self.path, path);
         write_text(path, &doc.to_string())
     }

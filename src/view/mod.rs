@@ -161,7 +161,11 @@ impl ViewerCore {
         let have = self.kd_boxes.as_ref().is_some_and(|(d, _)| *d == depth);
         if !have && self.kd_asked != Some(depth) {
             self.kd_asked = Some(depth);
-            let scene = Arc::new(self.edit.scene.clone());
+            // Any version of the current geometry will do: the last request's.
+            let scene = match &self.submitted {
+                Some((s, _)) => s.clone(),
+                None => Arc::new(self.edit.scene.clone()),
+            };
             self.worker.request_kd_boxes(self.geometry, scene, depth);
         }
     }

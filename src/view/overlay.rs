@@ -13,21 +13,14 @@ use crate::scene::Camera;
 /// `film` tone-mapped into a `width × height` RGBA8 image (nearest-pixel
 /// enlargement when the film is smaller, as for the preview pass).
 pub fn display_rgba(film: &Film, output: &OutputSettings, width: u32, height: u32) -> Vec<u8> {
-    let mut out = Vec::with_capacity(width as usize * height as usize * 4);
-    let (fw, fh) = (film.width.max(1), film.height.max(1));
-    if (fw, fh) == (width, height) {
-        for p in &film.pixels {
-            let [r, g, b] = encode_srgb8(tone_map(*p, output.tone_map, output.exposure));
-            out.extend_from_slice(&[r, g, b, 255]);
-        }
-        return out;
-    }
-    // Tone-map each film pixel once, then repeat it.
+    // Each film pixel is tone-mapped once, then repeated when enlarged.
     let mapped: Vec<[u8; 3]> = film
         .pixels
         .iter()
         .map(|p| encode_srgb8(tone_map(*p, output.tone_map, output.exposure)))
         .collect();
+    let (fw, fh) = (film.width.max(1), film.height.max(1));
+    let mut out = Vec::with_capacity(width as usize * height as usize * 4);
     for y in 0..height {
         let sy = (y as u64 * fh as u64 / height.max(1) as u64) as u32;
         for x in 0..width {

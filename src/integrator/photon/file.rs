@@ -76,33 +76,23 @@ pub fn write_photons(path: &Path, photons: &TracedPhotons, fingerprint: &str) ->
         ] {
             w.write_all(&n.to_le_bytes()).map_err(io)?;
         }
-        let mut buf = Vec::with_capacity(1 << 20);
-        let flush = |buf: &mut Vec<u8>, w: &mut dyn Write, force: bool| -> Result<(), OutputError> {
-            if force || buf.len() >= 1 << 20 {
-                w.write_all(buf).map_err(io)?;
-                buf.clear();
-            }
-            Ok(())
-        };
+        // `w` buffers (1 MiB): small writes cost a copy each.
         for p in &photons.positions {
             for c in p {
-                buf.extend_from_slice(&c.to_le_bytes());
+                w.write_all(&c.to_le_bytes()).map_err(io)?;
             }
-            flush(&mut buf, w, false)?;
         }
         for r in &photons.records {
-            buf.extend_from_slice(&r.rgbe);
-            buf.extend_from_slice(&r.dir[0].to_le_bytes());
-            buf.extend_from_slice(&r.dir[1].to_le_bytes());
-            flush(&mut buf, w, false)?;
+            w.write_all(&r.rgbe).map_err(io)?;
+            w.write_all(&r.dir[0].to_le_bytes()).map_err(io)?;
+            w.write_all(&r.dir[1].to_le_bytes()).map_err(io)?;
         }
         for s in &photons.sites {
             for c in s.position.to_array().into_iter().chain(s.normal.to_array()) {
-                buf.extend_from_slice(&c.to_le_bytes());
+                w.write_all(&c.to_le_bytes()).map_err(io)?;
             }
-            flush(&mut buf, w, false)?;
         }
-        flush(&mut buf, w, true)
+        Ok(())
     })
 }
 
