@@ -91,12 +91,12 @@ fn parse_csv(path: &Path) -> Vec<Row> {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "curve,budget,spp,photons,seconds,rmse,relmse,mae,build_seconds,within_budget"
+        "curve,budget,spp,photons,seconds,rmse,relmse,mae,build_seconds,within_budget,photon_seconds"
     );
     lines
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
-            assert_eq!(f.len(), 10, "{l}");
+            assert_eq!(f.len(), 11, "{l}");
             for v in &f[4..9] {
                 let x: f64 = v.parse().unwrap();
                 assert!(x.is_finite() && x >= 0.0, "{l}");

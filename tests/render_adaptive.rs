@@ -6,7 +6,7 @@ use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::{render, render_with_control, RenderControl, RenderOutput, RenderPlan};
 use caustic::math::{SamplerKind, Vec3A};
-use caustic::scene::{load_scene, IntegratorKind, Light, Scene};
+use caustic::scene::{load_scene, AdaptiveGoal, IntegratorKind, Light, Scene};
 use std::path::Path;
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -88,6 +88,101 @@ fn adaptive_stopping_does_not_bias_the_image() {
     }
     let ratio = sum / seeds as f64 / truth;
     assert!((ratio - 1.0).abs() < 0.01, "adaptive mean / reference mean = {ratio}");
+
+    // The image goal's looser stops keep the mean too.
+    let mut sum = 0.0;
+    for seed in 0..seeds {
+        let mut s = reference_scene.clone();
+        s.settings.spp = 512;
+        s.settings.noise_threshold = Some(0.05);
+        s.settings.adaptive_goal = AdaptiveGoal::Image;
+        s.settings.seed = 200 + seed;
+        let out = render(&s, accel.as_ref(), &RenderPlan::new(&s), &|_, _| {});
+        assert!(out.accumulation.converged.iter().any(|&c| c));
+        sum += mean(&out);
+    }
+    let ratio = sum / seeds as f64 / truth;
+    assert!((ratio - 1.0).abs() < 0.01, "image-goal mean / reference mean = {ratio}");
+}
+
+/// With the same threshold, the image goal (Neyman allocation) stops the
+/// noisy pixels earlier than the pixel goal: fewer samples, and the noisy
+/// pixels still take more than the quiet ones.
+#[test]
+fn image_goal_spends_samples_in_proportion_to_the_noise() {
+    let scene = adaptive_scene(0.08);
+    let accel = build(&scene);
+    let pixel = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let mut image_scene = scene.clone();
+    image_scene.settings.adaptive_goal = AdaptiveGoal::Image;
+    let image = render(&image_scene, accel.as_ref(), &RenderPlan::new(&image_scene), &|_, _| {});
+    let (p, i) = (pixel.accumulation.samples_taken(), image.accumulation.samples_taken());
+    assert!(i < p, "image goal took {i} samples, pixel goal {p}");
+    let (lo, hi) = image.accumulation.taken_range();
+    assert!(
+        lo >= 8 && hi > 2 * lo,
+        "image goal's sample counts {lo}..{hi}: nothing adapted"
+    );
+    // Per pixel, never more than the pixel goal (its stops come later or equal).
+    let more = (0..image.accumulation.len())
+        .filter(|&k| image.accumulation.taken[k] > pixel.accumulation.taken[k])
+        .count();
+    assert!(
+        more < image.accumulation.len() / 20,
+        "{more} pixels took more samples with the image goal"
+    );
+}
+
+/// A Whitted pixel that stops early (here after 4 of 256 planned samples)
+/// has its few light samples spread over the area light: its soft shadow
+/// is about as accurate as a render planned for 4 samples. (The light's
+/// strata used to be taken row by row, so 4 samples of 256 saw one strip
+/// of the light and the error was several times larger.)
+#[test]
+fn early_stopped_whitted_pixels_sample_the_whole_light() {
+    let mut scene = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/shadow.toml")).unwrap();
+    scene.settings.width = 48;
+    scene.settings.height = 36;
+    // One shadow ray per sample either way (the light's strata are the
+    // samples), so both renders cast the same number of rays.
+    for light in &mut scene.lights {
+        if let Light::Area(a) = light {
+            a.samples = 1;
+        }
+    }
+    let accel = build(&scene);
+    let rendered = |spp: u32, limit: Option<u32>, seed: u64| {
+        let mut s = scene.clone();
+        s.settings.spp = spp;
+        s.settings.seed = seed;
+        s.settings.sampler = Some(SamplerKind::Sobol);
+        let progress = |_, _| {};
+        let control = RenderControl {
+            sample_limit: limit,
+            ..RenderControl::to_completion(&progress)
+        };
+        let start = Accumulation::new(s.settings.width, s.settings.height);
+        render_with_control(&s, accel.as_ref(), &RenderPlan::new(&s), start, &control).film
+    };
+    let reference = rendered(1024, None, 1);
+    let mse = |spp: u32, limit: Option<u32>| -> f64 {
+        (0..4)
+            .map(|seed| {
+                let f = rendered(spp, limit, 10 + seed);
+                f.pixels
+                    .iter()
+                    .zip(&reference.pixels)
+                    .map(|(a, b)| ((*a - *b).length_squared()) as f64)
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    let planned = mse(4, None);
+    let stopped = mse(256, Some(4));
+    assert!(
+        stopped < 1.5 * planned,
+        "4 of 256 samples: squared error {stopped:.4}, a 4-sample render {planned:.4}"
+    );
 }
 
 #[test]

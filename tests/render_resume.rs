@@ -218,6 +218,7 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
                 let mut ctx = SampleContext {
                     rng,
                     slot: strata.slot(k),
+                    light_seed: strata.light_seed(),
                     fresnel_stratum: strata.fresnel_stratum(k),
                     counts: &mut counts,
                     sites: &mut SiteCache::default(),

@@ -9,7 +9,7 @@
 //! output.
 
 use crate::math::SamplerKind;
-use crate::scene::{IntegratorKind, Light, SampleSharing, Scene};
+use crate::scene::{AdaptiveGoal, IntegratorKind, Light, SampleSharing, Scene};
 use std::fmt;
 
 /// Bounces before the path integrator's Russian roulette may end a path.
@@ -23,6 +23,8 @@ pub struct Adaptive {
     pub threshold: f32,
     /// Samples every pixel takes before any stops.
     pub min_spp: u32,
+    /// What `threshold` bounds.
+    pub goal: AdaptiveGoal,
 }
 
 /// How the shadow rays of one light are cast.
@@ -274,6 +276,7 @@ impl RenderPlan {
             adaptive: s.noise_threshold.map(|threshold| Adaptive {
                 threshold,
                 min_spp: s.min_spp.clamp(2, spp.max(2)),
+                goal: s.adaptive_goal,
             }),
             seed: s.seed,
             ambient: !path && s.ambient.max_element() > 0.0,

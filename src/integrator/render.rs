@@ -18,14 +18,14 @@ use super::photon::{
     build_photon_map, photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache,
     TracedPhotons,
 };
-use super::plan::{PhotonPlan, RenderPlan};
+use super::plan::{Adaptive, PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
 use crate::film::{Accumulation, Film};
 use crate::math::rng::Domain;
 use crate::math::sampling::{grid_for, permute, stratified};
 use crate::math::{Rng, Sampler, SamplerKind, Vec3, Vec3A};
-use crate::scene::{IntegratorKind, Scene};
+use crate::scene::{AdaptiveGoal, IntegratorKind, Scene};
 use rayon::prelude::*;
 use std::fmt;
 use std::num::NonZero;
@@ -38,7 +38,7 @@ use std::time::{Duration, Instant};
 pub const TILE_SIZE: u32 = 32;
 
 /// Fewest samples per pixel one pass adds (the first pass takes this many).
-/// Each pass costs a little per pixel (the pixel's strata rotation, its
+/// Each pass costs a little per pixel (the pixel's strata keys, its
 /// state loaded and stored, one lock per tile): about 140 instructions,
 /// against about 2,000-5,000 per sample on the Cornell box without photons.
 /// Measured with callgrind (release, 1 thread, `--photons 0`): 640×360 at
@@ -406,7 +406,7 @@ pub fn render_progressive(
         let mut acc = snapshot(&states, width, height);
         let mut level = acc.active_level().unwrap_or(limit);
         if let Some(a) = plan.adaptive {
-            if level >= a.min_spp && level < limit && mark_converged(&mut acc, a.threshold, a.min_spp, level) > 0 {
+            if level >= a.min_spp && level < limit && mark_converged(&mut acc, &a, level) > 0 {
                 for state in &states {
                     let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
                     s.acc = acc.region(s.tile.x0, s.tile.y0, s.tile.x1, s.tile.y1);
@@ -517,7 +517,12 @@ fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulatio
 /// sampling has `level` samples: such a pixel (with at least `min_spp`)
 /// stops when the root mean square of the estimated relative errors of the
 /// pixels sampling up to `level` in its 5 × 5 neighbourhood (itself
-/// excluded) is at most `threshold`. Returns the number of pixels stopped.
+/// excluded) is at most the threshold: `threshold` for
+/// [`AdaptiveGoal::Pixel`], `threshold · √(level / min_spp)` for
+/// [`AdaptiveGoal::Image`] (Neyman allocation: a pixel of variance σ² goes
+/// on while σ²/n², what one more sample removes from its squared error,
+/// exceeds a fixed price, so it ends with n ∝ σ). Returns the number of
+/// pixels stopped.
 ///
 /// The decision never looks at the pixel's own samples: its sample count
 /// is then independent of the samples it averages, which keeps its mean
@@ -536,7 +541,12 @@ fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulatio
 ///
 /// Does nothing unless every pixel still sampling has exactly `level`
 /// samples (a render stopped in the middle of a pass finishes the pass first).
-pub fn mark_converged(acc: &mut Accumulation, threshold: f32, min_spp: u32, level: u32) -> usize {
+pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -> usize {
+    let min_spp = adaptive.min_spp;
+    let threshold = match adaptive.goal {
+        AdaptiveGoal::Pixel => adaptive.threshold,
+        AdaptiveGoal::Image => adaptive.threshold * (level as f32 / min_spp.max(1) as f32).sqrt(),
+    };
     let sampling = |i: usize| !acc.converged[i] || acc.taken[i] == level;
     if (0..acc.len()).any(|i| !acc.converged[i] && acc.taken[i] != level) {
         return 0;
@@ -636,6 +646,7 @@ fn render_tile_pass(
                         let mut ctx = SampleContext {
                             rng,
                             slot: strata.slot(k),
+                            light_seed: strata.light_seed(),
                             fresnel_stratum: strata.fresnel_stratum(k),
                             counts: &mut out.rays,
                             sites: &mut sites,
@@ -677,10 +688,12 @@ pub const SAMPLE_RADIANCE_LIMIT: f32 = f32::MAX / 4_294_967_296.0;
 /// The per-pixel assignments of spread sampling, shared by a pixel's samples
 /// (identical however the samples are split into passes).
 ///
-/// * Sample `k` takes the area lights' strata share `(k + rotation) mod spp`:
-///   the per-pixel random rotation decouples the share from the sub-pixel
-///   stratum `k`, so each sub-pixel position sees every share equally often
-///   in expectation.
+/// * Sample `k` takes the area lights' strata share `k mod spp`; the
+///   strata of the light grid are visited in a per-pixel scrambled order
+///   ([`stratum_order`](crate::math::sampling::stratum_order), keyed by
+///   `light_seed`) that is independent of the sub-pixel position's, so each
+///   sub-pixel position sees every stratum equally often in expectation, and
+///   the first samples of a pixel cover the light evenly.
 /// * Its first Fresnel choice takes the stratum `(a·k + b) mod spp`, with
 ///   `a` coprime to `spp` and `b` random: a permutation of the samples,
 ///   independent of the strata share, whose stratum is uniform for every
@@ -688,7 +701,8 @@ pub const SAMPLE_RADIANCE_LIMIT: f32 = f32::MAX / 4_294_967_296.0;
 #[derive(Clone, Copy, Debug)]
 pub struct PixelStrata {
     spp: u32,
-    rotation: u32,
+    /// Key of the order in which the area lights' strata are visited.
+    light_seed: u32,
     /// `(a, b)` of the Fresnel permutation; `None` when not spreading.
     fresnel: Option<(u32, u32)>,
 }
@@ -704,12 +718,12 @@ impl PixelStrata {
         if !spread {
             return Self {
                 spp,
-                rotation: 0,
+                light_seed: 0,
                 fresnel: None,
             };
         }
         let mut rng = Rng::new(seed, Domain::Pixel, pixel, u64::MAX);
-        let rotation = rng.below(spp);
+        let light_seed = rng.below(u32::MAX);
         let fresnel_add = rng.below(spp);
         // A multiplier coprime to spp (1 when none is drawn in a few tries).
         let fresnel_mul = (0..4)
@@ -718,14 +732,19 @@ impl PixelStrata {
             .unwrap_or(1);
         Self {
             spp,
-            rotation,
+            light_seed,
             fresnel: Some((fresnel_mul, fresnel_add)),
         }
     }
 
     /// The strata share of sample `k` (0 when not spreading).
     pub fn slot(&self, k: u32) -> u32 {
-        ((k as u64 + self.rotation as u64) % self.spp as u64) as u32
+        k % self.spp
+    }
+
+    /// The key of the pixel's order of area-light strata.
+    pub fn light_seed(&self) -> u32 {
+        self.light_seed
     }
 
     /// The stratum of sample `k`'s first Fresnel choice (`None` when not spreading).

@@ -42,7 +42,7 @@ use crate::accel::Accel;
 use crate::bsdf::phong;
 use crate::bsdf::specular::{self, reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
-use crate::math::sampling::stratified;
+use crate::math::sampling::{stratified, stratum_order};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
@@ -88,6 +88,9 @@ pub struct SampleContext<'c> {
     /// With spread sampling, which share `slot ∈ [0, spp)` of the area
     /// lights' strata this sample takes. Ignored when splitting.
     pub slot: u32,
+    /// Key of the order in which the area lights' strata are visited
+    /// ([`stratum_order`]), per pixel; each light mixes in its index.
+    pub light_seed: u32,
     /// With spread sampling, the stratum in `[0, spp)` of the sample's first
     /// Fresnel choice (reflect or refract at a dielectric); taken by that
     /// choice, later ones draw from `rng`. `None`: every choice draws.
@@ -300,11 +303,13 @@ impl<'a> Whitted<'a> {
                         (0, 1, 1.0 / strata as f32)
                     };
                     let area = a.area();
+                    let light_seed = ctx.light_seed ^ (lp.index as u32).wrapping_mul(0x9e37_79b9);
                     let mut sum = Vec3A::ZERO;
                     let mut s = first;
                     while s < strata {
                         let (jx, jy) = ctx.rng.f32x2();
-                        let q = a.point(stratified(s, nx, ny, Vec2::new(jx, jy)));
+                        let cell = stratum_order(s, nx, ny, light_seed);
+                        let q = a.point(stratified(cell, nx, ny, Vec2::new(jx, jy)));
                         s += step;
                         let to = q - si.p;
                         let d2 = to.length_squared();

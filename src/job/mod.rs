@@ -59,6 +59,8 @@ pub struct Overrides {
     pub noise_threshold: Option<f32>,
     /// Samples every pixel takes before adaptive sampling stops any.
     pub min_spp: Option<u32>,
+    /// What the noise threshold bounds.
+    pub adaptive_goal: Option<crate::scene::AdaptiveGoal>,
 }
 
 impl Overrides {
@@ -100,6 +102,9 @@ impl Overrides {
                 )));
             }
             s.min_spp = n;
+        }
+        if let Some(g) = self.adaptive_goal {
+            s.adaptive_goal = g;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
             .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))

@@ -165,10 +165,62 @@ pub fn grid_for(n: u32) -> (u32, u32) {
     (nx.max(1), n / nx.max(1))
 }
 
+/// The cell of an `nx × ny` grid that position `s` of a per-`seed` visiting
+/// order takes (row-major index). Every full cycle of `nx·ny` positions
+/// visits each cell once, in any case. When both sides are powers of two,
+/// the order is the Owen-scrambled Sobol (0,2)-sequence's (points `s` of
+/// dimensions 0 and 1, `sobol_burley`): its first `2^k` points form a
+/// (0,k,2)-net, so every power-of-two prefix is itself stratified over the
+/// whole grid (Owen 1997; Kollig & Keller 2002). A pixel that stops after
+/// a few samples (adaptive sampling, a time limit) then has its light
+/// samples spread over the light, not bunched in one row of strata.
+/// Otherwise it is a random permutation ([`permute`]): prefixes are
+/// uniformly random subsets.
+pub fn stratum_order(s: u32, nx: u32, ny: u32, seed: u32) -> u32 {
+    let (nx, ny) = (nx.max(1), ny.max(1));
+    let n = nx * ny;
+    let s = s % n;
+    if nx.is_power_of_two() && ny.is_power_of_two() && n <= 1 << 16 {
+        let x = (sobol_burley::sample(s, 0, seed) * nx as f32) as u32;
+        let y = (sobol_burley::sample(s, 1, seed) * ny as f32) as u32;
+        y.min(ny - 1) * nx + x.min(nx - 1)
+    } else {
+        permute(s, n, seed)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::rng::{Domain, Rng};
+
+    #[test]
+    fn stratum_order_visits_every_cell_once_and_prefixes_spread() {
+        for &(nx, ny) in &[(1, 1), (2, 1), (4, 4), (8, 4), (16, 16), (5, 4), (3, 7), (64, 64)] {
+            for seed in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; (nx * ny) as usize];
+                for s in 0..nx * ny {
+                    let c = stratum_order(s, nx, ny, seed) as usize;
+                    assert!(!seen[c], "{nx}×{ny} seed {seed}: cell {c} twice");
+                    seen[c] = true;
+                }
+            }
+        }
+        // Power-of-two grids: the first 4 positions of a 16 × 16 grid fall
+        // in the 4 quadrants, the first 16 in the 16 blocks of 4 × 4 cells.
+        for seed in 0..20u32 {
+            for (count, side) in [(4u32, 2u32), (16, 4)] {
+                let mut blocks = vec![false; count as usize];
+                for s in 0..count {
+                    let c = stratum_order(s, 16, 16, seed);
+                    let (x, y) = (c % 16, c / 16);
+                    let b = ((y * side / 16) * side + x * side / 16) as usize;
+                    assert!(!blocks[b], "seed {seed}: prefix {count} has two cells in block {b}");
+                    blocks[b] = true;
+                }
+            }
+        }
+    }
 
     #[test]
     fn permute_is_a_bijection_for_every_length() {

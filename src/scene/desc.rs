@@ -200,6 +200,18 @@ pub struct RenderDesc {
     pub noise_threshold: Option<Spanned<f64>>,
     /// Samples before adaptive sampling stops a pixel.
     pub min_spp: Option<Spanned<u32>>,
+    /// What the noise threshold bounds.
+    pub adaptive_goal: Option<AdaptiveGoalName>,
+}
+
+/// Adaptive goal names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AdaptiveGoalName {
+    /// `"pixel"`.
+    Pixel,
+    /// `"image"`.
+    Image,
 }
 
 /// Sampler names.

@@ -9,7 +9,8 @@ use crate::film::OutputError;
 use std::path::Path;
 
 /// CSV header of [`csv_text`].
-pub const CSV_HEADER: &str = "curve,budget,spp,photons,seconds,rmse,relmse,mae,build_seconds,within_budget";
+pub const CSV_HEADER: &str =
+    "curve,budget,spp,photons,seconds,rmse,relmse,mae,build_seconds,within_budget,photon_seconds";
 
 /// The measurements as CSV: [`CSV_HEADER`], then one row per measurement.
 /// `seconds` excludes the accelerator build (`build_seconds`).
@@ -18,7 +19,7 @@ pub fn csv_text(measurements: &[Measurement]) -> String {
     s.push('\n');
     for m in measurements {
         s.push_str(&format!(
-            "{},{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{:.6},{}\n",
+            "{},{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{:.6},{},{:.6}\n",
             m.curve,
             m.budget,
             m.spp,
@@ -28,7 +29,8 @@ pub fn csv_text(measurements: &[Measurement]) -> String {
             m.error.relmse,
             m.error.mae,
             m.build_seconds,
-            m.within_budget
+            m.within_budget,
+            m.photon_seconds
         ));
     }
     s
@@ -152,6 +154,7 @@ mod tests {
             photons: 100,
             seconds: 0.5,
             build_seconds: 0.1,
+            photon_seconds: 0.0,
             error: ErrorMetrics {
                 rmse: 0.25,
                 relmse: 0.125,
@@ -165,7 +168,7 @@ mod tests {
         assert_eq!(lines[0], CSV_HEADER);
         assert_eq!(
             lines[1],
-            "kdtree,2:100,2,100,0.500000,2.500000e-1,1.250000e-1,2.000000e-1,0.100000,true"
+            "kdtree,2:100,2,100,0.500000,2.500000e-1,1.250000e-1,2.000000e-1,0.100000,true,0.000000"
         );
     }
 }

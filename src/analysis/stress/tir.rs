@@ -154,6 +154,7 @@ fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64)
     let mut ctx = SampleContext {
         rng: crate::math::Sampler::independent(trial_rng(seed, CASE, 1 << 40 | i)),
         slot: 0,
+        light_seed: 0,
         fresnel_stratum: None,
         counts: &mut counts,
         sites: &mut SiteCache::default(),

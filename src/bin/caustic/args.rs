@@ -171,6 +171,11 @@ pub struct RenderArgs {
     /// Samples every pixel takes before adaptive sampling stops any (default 16).
     #[arg(long)]
     pub min_spp: Option<u32>,
+    /// What --noise-threshold bounds: every pixel's error (pixel, the
+    /// default) or the image's mean relative squared error per sample
+    /// (image: samples in proportion to each pixel's noise).
+    #[arg(long, value_enum)]
+    pub adaptive_goal: Option<AdaptiveGoalArg>,
     /// Most samples per pixel (the same as --spp).
     #[arg(long, conflicts_with = "spp")]
     pub max_spp: Option<u32>,
@@ -358,6 +363,24 @@ pub struct CrosscheckArgs {
     pub accel: AccelArgs,
 }
 
+/// What adaptive sampling's threshold bounds.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum AdaptiveGoalArg {
+    /// Every pixel's estimated relative error.
+    Pixel,
+    /// The image's relMSE per sample (Neyman allocation).
+    Image,
+}
+
+impl From<AdaptiveGoalArg> for caustic::scene::AdaptiveGoal {
+    fn from(g: AdaptiveGoalArg) -> Self {
+        match g {
+            AdaptiveGoalArg::Pixel => Self::Pixel,
+            AdaptiveGoalArg::Image => Self::Image,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 pub enum GatherArg {
     Direct,
@@ -404,6 +427,13 @@ pub struct ConvergeArgs {
     /// Most samples per pixel of an adaptive render.
     #[arg(long)]
     pub max_spp: Option<u32>,
+    /// Samples every pixel of an adaptive render takes before any stops
+    /// (default: the scene's min_spp, else 16).
+    #[arg(long)]
+    pub min_spp: Option<u32>,
+    /// What an adaptive render's threshold bounds (see `render --adaptive-goal`).
+    #[arg(long, value_enum)]
+    pub adaptive_goal: Option<AdaptiveGoalArg>,
     /// For every curve, render on (spp doubled, threshold halved) until
     /// relMSE is at most this, and report the time it took (interpolated).
     #[arg(long)]

@@ -137,6 +137,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         sampler: args.sampler.map(Into::into),
         noise_threshold: None,
         min_spp: None,
+        adaptive_goal: args.adaptive_goal.map(Into::into),
         ..Overrides::default()
     }
     .apply(&mut scene, &args.scene)
@@ -172,6 +173,15 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     let max_spp = args.max_spp.unwrap_or(1024);
     caustic::limits::check_image_limits(scene.settings.width, scene.settings.height, max_spp)
         .map_err(|e| bad_input(anyhow::anyhow!("--max-spp {max_spp}: {e}")))?;
+    if let Some(n) = args.min_spp {
+        if n < 2 || n > max_spp.max(2) {
+            return Err(bad_input(anyhow::anyhow!(
+                "--min-spp {n}: must be in 2..={} (--max-spp)",
+                max_spp.max(2)
+            )));
+        }
+        scene.settings.min_spp = n;
+    }
     let options = ConvergeOptions {
         budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
         curves: CurveSpec::with_samplers(

@@ -43,6 +43,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             sampler: args.sampler.map(Into::into),
             noise_threshold: args.noise_threshold,
             min_spp: args.min_spp,
+            adaptive_goal: args.adaptive_goal.map(Into::into),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),

@@ -8,10 +8,10 @@ use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{SamplerKind, Vec3A};
 use crate::scene::desc::{
-    CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName, SharingName, Spanned, ToneMapName,
-    TriangleTestName,
+    AdaptiveGoalName, CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName, SharingName,
+    Spanned, ToneMapName, TriangleTestName,
 };
-use crate::scene::{Camera, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing};
+use crate::scene::{AdaptiveGoal, Camera, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing};
 
 /// Largest `max_depth`.
 pub const MAX_DEPTH: u32 = 64;
@@ -115,6 +115,10 @@ impl Ctx<'_> {
             medium: None,
             noise_threshold,
             min_spp,
+            adaptive_goal: match r.adaptive_goal {
+                None | Some(AdaptiveGoalName::Pixel) => AdaptiveGoal::Pixel,
+                Some(AdaptiveGoalName::Image) => AdaptiveGoal::Image,
+            },
             sampler: r.sampler.map(|s| match s {
                 SamplerName::Sobol => SamplerKind::Sobol,
                 SamplerName::Independent => SamplerKind::Independent,
