@@ -192,7 +192,7 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
         written.push(p.display().to_string());
     }
     if let Some(p) = &request.exr {
-        write_exr_output(p, &film_image, &merged)?;
+        write_exr_output(p, &film_image, &merged, None)?;
         written.push(p.display().to_string());
     }
     if let Some(p) = &request.partial {

@@ -200,6 +200,8 @@ pub struct RenderDesc {
     pub noise_threshold: Option<Spanned<f64>>,
     /// Samples before adaptive sampling stops a pixel.
     pub min_spp: Option<Spanned<u32>>,
+    /// Denoise the final image (Open Image Denoise).
+    pub denoise: Option<bool>,
 }
 
 /// Sampler names.

@@ -174,6 +174,11 @@ pub struct RenderArgs {
     /// Most samples per pixel (the same as --spp).
     #[arg(long, conflicts_with = "spp")]
     pub max_spp: Option<u32>,
+    /// Denoise the PNG and the EXR's main layer with Open Image Denoise,
+    /// guided by the albedo and normal images (the raw image stays in the
+    /// EXR as noisy.R/G/B; checkpoints stay raw). Also `[render] denoise = true`.
+    #[arg(long)]
+    pub denoise: bool,
     /// Render progressively until this many seconds have passed, then write
     /// the image so far (with --noise-threshold: whichever comes first).
     #[arg(long)]

@@ -66,6 +66,10 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
     for (k, v) in &s.details {
         println!("            {k}: {v}");
     }
+    match caustic::film::denoise::library() {
+        Some((version, source)) => println!("denoiser    Open Image Denoise {version} ({source})"),
+        None => println!("denoiser    none (built without the `denoise` feature)"),
+    }
     if let Some(peak) = caustic::memory::peak_rss_bytes() {
         println!(
             "peak memory {:.1} MiB resident (scene + accelerator)",
