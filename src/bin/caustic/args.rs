@@ -406,6 +406,10 @@ pub struct ConvergeArgs {
     /// halved from 0.5 until the target is met).
     #[arg(long)]
     pub adaptive_search: bool,
+    /// Add a denoised copy of every curve (`/denoised`: each image through
+    /// Open Image Denoise before it is measured, the filter's time included).
+    #[arg(long)]
+    pub denoise: bool,
     /// Most samples per pixel of an adaptive render.
     #[arg(long)]
     pub max_spp: Option<u32>,
