@@ -286,6 +286,51 @@ fn render_denoise_writes_the_denoised_image_and_keeps_the_raw_one() {
 
 #[cfg(feature = "denoise")]
 #[test]
+fn merge_denoises_the_merged_image_and_a_shard_refuses_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let common = [
+        "render",
+        "scenes/cornell.toml",
+        "--width",
+        "48",
+        "--height",
+        "40",
+        "--spp",
+        "2",
+        "--photons",
+        "1000",
+    ];
+    for i in 0..2 {
+        let shard = format!("{i}/2");
+        let o = caustic(
+            &[
+                &common[..],
+                &["--shard", &shard, "-o", &path(&format!("p{i}.exr")), "--quiet"],
+            ]
+            .concat(),
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = caustic(&[&common[..], &["--shard", "0/2", "-o", &path("x.exr"), "--denoise"]].concat());
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("caustic merge --denoise"), "{}", stderr(&o));
+    let (p0, p1) = (path("p0.exr"), path("p1.exr"));
+    let o = caustic(&["merge", &p0, &p1, "--exr", &path("raw.exr")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = caustic(&["merge", &p0, &p1, "--exr", &path("dn.exr"), "--denoise"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (raw, dn) = (
+        exr_channels(Path::new(&path("raw.exr"))),
+        exr_channels(Path::new(&path("dn.exr"))),
+    );
+    assert_eq!(dn["noisy.G"], raw["G"]);
+    assert_ne!(dn["G"], raw["G"]);
+    assert_eq!(dn["normal.Z"], raw["normal.Z"]);
+}
+
+#[cfg(feature = "denoise")]
+#[test]
 fn scene_setting_denoise_turns_it_on() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("s.toml");

@@ -318,6 +318,10 @@ pub struct MergeArgs {
     /// Write the merged shards as a new partial (any subset: tree reductions).
     #[arg(long)]
     pub partial: Option<PathBuf>,
+    /// Denoise the PNG and the EXR's main layer (Open Image Denoise; the raw
+    /// image stays in the EXR as noisy.R/G/B).
+    #[arg(long)]
+    pub denoise: bool,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,

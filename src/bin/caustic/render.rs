@@ -126,6 +126,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
         png: args.output,
         exr: args.exr,
         partial: args.partial,
+        denoise: args.denoise,
     };
     let report = job::merge_partials(&request).map_err(job_failure)?;
     if !args.quiet {
@@ -139,6 +140,9 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
                 m.seed,
                 report.accumulation.samples_taken()
             );
+        }
+        if let Some(d) = &report.denoise {
+            println!("denoised in {:.3} s", d.time.as_secs_f64());
         }
         println!("written: {}", report.written.join(", "));
     }
