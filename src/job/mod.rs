@@ -603,15 +603,21 @@ pub fn denoise_accumulation(
 
 /// Time kept from a render's budget for denoising its image: OIDN's CPU
 /// filter at high quality takes about [`DENOISE_SECONDS_PER_MEGAPIXEL`]
-/// per million pixels per core; at most a quarter of the budget.
+/// per million pixels per core, after about [`DENOISE_SETUP_SECONDS`] to
+/// set up; at most a quarter of the budget.
 fn denoise_reserve(width: u32, height: u32, budget: Duration) -> Duration {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
     let megapixels = width as f64 * height as f64 / 1.0e6;
-    Duration::from_secs_f64(megapixels * DENOISE_SECONDS_PER_MEGAPIXEL / cores).min(budget / 4)
+    let seconds = DENOISE_SETUP_SECONDS + megapixels * DENOISE_SECONDS_PER_MEGAPIXEL / cores;
+    Duration::from_secs_f64(seconds).min(budget / 4)
 }
 
-/// Measured single-core cost of the high-quality filter (see `denoise_reserve`).
+/// Measured CPU cost of the high-quality filter per million pixels (2.9 s
+/// at 1920×1080, 3.5 s at 256×256), rounded up (see `denoise_reserve`).
 pub const DENOISE_SECONDS_PER_MEGAPIXEL: f64 = 4.0;
+
+/// Device and filter creation before the first pixel (see `denoise_reserve`).
+pub const DENOISE_SETUP_SECONDS: f64 = 0.15;
 
 /// Writes the linear EXR of a render: the film and, beside it, where the
 /// work went (each pixel's estimated relative error and its sample count),
