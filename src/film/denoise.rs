@@ -4,10 +4,12 @@
 //! sample follows perfect specular surfaces deterministically), so they are
 //! passed as clean auxiliaries and never prefiltered.
 //!
-//! OIDN's CPU device runs on its own TBB thread pool. Its result may differ
-//! in the last bits between machines (the kernels chosen depend on the
-//! instruction set) and with the number of threads; caustic's determinism
-//! holds for the raw image, kept beside the denoised one.
+//! OIDN's CPU device runs on TBB: Embree's when both are linked (the
+//! dynamic linker binds OIDN's TBB calls to the first TBB loaded, see
+//! docs/denoise.md), else the one beside OIDN. Its result may differ in the
+//! last bits between machines (the kernels chosen depend on the instruction
+//! set; on one machine it was the same bits for 1 and 2 cores); caustic's
+//! determinism holds for the raw image, kept beside the denoised one.
 
 use super::Film;
 use crate::math::Vec3;
