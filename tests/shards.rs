@@ -63,6 +63,7 @@ fn merge(partials: &[PathBuf], png: Option<&Path>, partial: Option<&Path>) -> Re
         png: png.map(Path::to_path_buf),
         exr: None,
         partial: partial.map(Path::to_path_buf),
+        denoise: false,
     })
 }
 
@@ -87,6 +88,7 @@ fn tiles_merge_is_bit_identical_for_any_shard_and_thread_count() {
             png: Some(png.clone()),
             exr: Some(exr.clone()),
             partial: None,
+            denoise: false,
         })
         .unwrap();
         assert!(report.accumulation == reference, "{count} shards, {threads} threads");

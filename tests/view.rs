@@ -54,6 +54,37 @@ fn frames_are_the_batch_render_of_the_same_samples() {
     assert!(f.film.mean().max_element() > 0.0);
 }
 
+#[cfg(feature = "denoise")]
+#[test]
+fn the_denoise_toggle_shows_a_denoised_image_without_stopping_the_render() {
+    let mut core = ViewerCore::new(cornell(), (48, 27), AccelKind::KdTree, || {});
+    core.sync();
+    assert!(core.wait_for_spp(8, TIMEOUT), "the render completes");
+    assert!(core.denoised.is_none(), "nothing is denoised while the toggle is off");
+    core.denoise = true;
+    let end = std::time::Instant::now() + TIMEOUT;
+    while core.denoised.is_none() && std::time::Instant::now() < end {
+        core.wait(Duration::from_millis(200));
+    }
+    let frame = core.frame.clone().unwrap();
+    let (generation, pass, film, _) = core.denoised.clone().expect("a denoised image arrives");
+    assert_eq!(
+        (generation, pass),
+        (frame.generation, frame.pass),
+        "the last pass is denoised"
+    );
+    assert_eq!((film.width, film.height), (48, 27));
+    assert!(film.pixels != frame.film.pixels && film.mean().max_element() > 0.0);
+    assert!(std::sync::Arc::ptr_eq(core.shown_film().unwrap(), &film));
+    core.denoise = false;
+    assert!(std::sync::Arc::ptr_eq(core.shown_film().unwrap(), &frame.film));
+    // A change renders again: the old denoised image is not shown for it.
+    core.denoise = true;
+    core.edit.orbit.zoom(1.0);
+    assert!(core.sync());
+    assert!(core.shown_film().is_none_or(|f| !std::sync::Arc::ptr_eq(f, &film)));
+}
+
 #[test]
 fn a_change_restarts_refinement_without_mixing_versions() {
     let mut core = ViewerCore::new(cornell(), (48, 27), AccelKind::KdTree, || {});

@@ -33,7 +33,17 @@ pub struct Accumulation {
     pub odd_kept: Vec<u32>,
     /// Pixels adaptive sampling has stopped: they take no more samples.
     pub converged: Vec<bool>,
+    /// Sum of the albedo AOV of the pixel's first [`AOV_SAMPLES`] samples
+    /// (every sample taken counts, in increasing sample index, in f32).
+    pub albedo: Vec<Vec3>,
+    /// Sum of the shading-normal AOV of the same samples.
+    pub normal: Vec<Vec3>,
 }
+
+/// Samples per pixel that trace the auxiliary images (albedo, normal): the
+/// first ones. They are noise-free apart from the sub-pixel position, so a
+/// few dozen antialias them; later samples skip the extra rays.
+pub const AOV_SAMPLES: u32 = 64;
 
 /// Floor of the relative error's denominator, in linear radiance (the ε of
 /// relMSE in `caustic converge`: `(x − r)² / (r² + ε)`, with ε = 1e-2).
@@ -52,6 +62,8 @@ impl Accumulation {
             odd: vec![Vec3::ZERO; n],
             odd_kept: vec![0; n],
             converged: vec![false; n],
+            albedo: vec![Vec3::ZERO; n],
+            normal: vec![Vec3::ZERO; n],
         }
     }
 
@@ -84,7 +96,9 @@ impl Accumulation {
         self.kept[dst.clone()].copy_from_slice(&src.kept[from.clone()]);
         self.odd[dst.clone()].copy_from_slice(&src.odd[from.clone()]);
         self.odd_kept[dst.clone()].copy_from_slice(&src.odd_kept[from.clone()]);
-        self.converged[dst].copy_from_slice(&src.converged[from]);
+        self.converged[dst.clone()].copy_from_slice(&src.converged[from.clone()]);
+        self.albedo[dst.clone()].copy_from_slice(&src.albedo[from.clone()]);
+        self.normal[dst].copy_from_slice(&src.normal[from]);
     }
 
     /// Estimated relative standard error of pixel `i`'s mean: from the two
@@ -174,6 +188,15 @@ impl Accumulation {
                 self.converged.len()
             ));
         }
+        if self.albedo.len() != n || self.normal.len() != n {
+            return Err(format!(
+                "{}×{} pixels but {} albedo and {} normal sums",
+                self.width,
+                self.height,
+                self.albedo.len(),
+                self.normal.len()
+            ));
+        }
         if self.sum.len() != n || self.taken.len() != n || self.kept.len() != n {
             return Err(format!(
                 "{}×{} pixels but {} sums, {} taken counts and {} kept counts",
@@ -194,6 +217,9 @@ impl Accumulation {
             }
             if !self.sum[i].is_finite() || !self.odd[i].is_finite() {
                 return Err(format!("pixel ({x}, {y}): the radiance sum is not finite"));
+            }
+            if !self.albedo[i].is_finite() || !self.normal[i].is_finite() {
+                return Err(format!("pixel ({x}, {y}): the albedo or normal sum is not finite"));
             }
             if self.odd_kept[i] > self.kept[i] || self.odd_kept[i] > self.taken[i] / 2 {
                 return Err(format!(
@@ -218,6 +244,49 @@ impl Accumulation {
                     Vec3::from(Vec3A::from(sum) / kept as f32)
                 } else {
                     Vec3::ZERO
+                }
+            })
+            .collect();
+        Film {
+            width: self.width,
+            height: self.height,
+            pixels,
+        }
+    }
+}
+
+impl Accumulation {
+    /// Samples of pixel `i` in its AOV sums.
+    pub fn aov_samples(&self, i: usize) -> u32 {
+        self.taken[i].min(AOV_SAMPLES)
+    }
+
+    /// The albedo image: each pixel the mean of its AOV samples (black
+    /// before any).
+    pub fn albedo_film(&self) -> Film {
+        self.aov_film(&self.albedo, false)
+    }
+
+    /// The shading-normal image: each pixel's mean normal, renormalised to
+    /// unit length (zero where every sample escaped or none was taken).
+    pub fn normal_film(&self) -> Film {
+        self.aov_film(&self.normal, true)
+    }
+
+    fn aov_film(&self, sums: &[Vec3], unit: bool) -> Film {
+        let pixels = sums
+            .iter()
+            .enumerate()
+            .map(|(i, &sum)| {
+                let n = self.aov_samples(i);
+                if n == 0 {
+                    return Vec3::ZERO;
+                }
+                let mean = sum / n as f32;
+                if unit {
+                    mean.normalize_or_zero()
+                } else {
+                    mean
                 }
             })
             .collect();
@@ -266,5 +335,23 @@ mod tests {
         assert!(a.validate(8).unwrap_err().contains("pixel (2, 1)"));
         a.sum.pop();
         assert!(a.validate(8).unwrap_err().contains("5 sums"));
+    }
+
+    #[test]
+    fn aov_images_average_their_samples() {
+        let mut a = Accumulation::new(3, 1);
+        a.taken = vec![4, AOV_SAMPLES + 36, 0];
+        a.albedo[0] = Vec3::new(2.0, 1.0, 0.0);
+        a.normal[0] = Vec3::new(0.0, 0.0, -4.0);
+        a.albedo[1] = Vec3::splat(AOV_SAMPLES as f32 * 0.5);
+        a.normal[1] = Vec3::new(3.0, 4.0, 0.0);
+        let (albedo, normal) = (a.albedo_film(), a.normal_film());
+        assert_eq!(albedo.pixels, [Vec3::new(0.5, 0.25, 0.0), Vec3::splat(0.5), Vec3::ZERO]);
+        assert_eq!(
+            normal.pixels,
+            [Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.6, 0.8, 0.0), Vec3::ZERO]
+        );
+        a.normal[2] = Vec3::new(f32::INFINITY, 0.0, 0.0);
+        assert!(a.validate(u32::MAX).unwrap_err().contains("pixel (2, 0)"));
     }
 }

@@ -13,6 +13,8 @@
 //! | `odd.R`, `odd.G`, `odd.B` | f32 | the running sums of the kept samples of odd index (noise estimate) |
 //! | `odd.kept` | u32 | kept samples of odd index |
 //! | `converged` | u32 | 1 where adaptive sampling stopped the pixel |
+//! | `albedo.R`, `albedo.G`, `albedo.B` | f32 | the running sums of the albedo AOV (first samples, see `Accumulation`) |
+//! | `normal.X`, `normal.Y`, `normal.Z` | f32 | the running sums of the shading-normal AOV |
 //!
 //! and the header attributes `caustic.format` (= [`CHECKPOINT_FORMAT`]),
 //! `caustic.width`, `caustic.height`, `caustic.spp`, `caustic.seed`,
@@ -27,8 +29,10 @@
 //! a samples partial `samples.taken` is the next sample index (the shard's
 //! samples start at its range's first index) and the sums hold the shard's
 //! samples only. The file is written atomically (temporary file, fsync,
-//! rename), like the images. Files of the previous format,
-//! `caustic-checkpoint-2` (no display or shard attributes), are still read.
+//! rename), like the images. Files of the previous formats are still read:
+//! `caustic-checkpoint-3` (no AOV channels: their sums read as zero, so the
+//! AOVs of a render resumed from one miss its earlier samples) and
+//! `caustic-checkpoint-2` (no display or shard attributes either).
 
 use super::accum::Accumulation;
 use super::output::{write_atomically, OutputError};
@@ -39,7 +43,10 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Value of the `caustic.format` attribute; bumped when the layout changes.
-pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-3";
+pub const CHECKPOINT_FORMAT: &str = "caustic-checkpoint-4";
+
+/// The previous format, still read: no AOV channels.
+pub const CHECKPOINT_FORMAT_3: &str = "caustic-checkpoint-3";
 
 /// The previous format, still read: the same channels, without the display
 /// and shard attributes (its files are whole renders with default display
@@ -109,6 +116,8 @@ const KEPT: &str = "samples.kept";
 const ODD: [&str; 3] = ["odd.R", "odd.G", "odd.B"];
 const ODD_KEPT: &str = "odd.kept";
 const CONVERGED: &str = "converged";
+const ALBEDO: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
+const NORMAL: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
 
 /// Writes `accumulation` and `meta` to `path` atomically.
 pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &CheckpointMeta) -> Result<(), OutputError> {
@@ -122,6 +131,8 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
         channels.push(AnyChannel::new(PREVIEW[c], component(&film.pixels, c)));
         channels.push(AnyChannel::new(SUM[c], component(&accumulation.sum, c)));
         channels.push(AnyChannel::new(ODD[c], component(&accumulation.odd, c)));
+        channels.push(AnyChannel::new(ALBEDO[c], component(&accumulation.albedo, c)));
+        channels.push(AnyChannel::new(NORMAL[c], component(&accumulation.normal, c)));
     }
     channels.push(AnyChannel::new(TAKEN, FlatSamples::U32(accumulation.taken.clone())));
     channels.push(AnyChannel::new(KEPT, FlatSamples::U32(accumulation.kept.clone())));
@@ -212,6 +223,10 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         cause,
     };
     let (meta, header) = read_header(path)?;
+    let has_aovs = header.own_attributes.other.iter().any(|(k, v)| {
+        *k == *"caustic.format"
+            && matches!(v, exr::meta::attribute::AttributeValue::Text(t) if *t == *CHECKPOINT_FORMAT)
+    });
     let size = (meta.width as usize, meta.height as usize);
     if header.layer_size.0 != size.0 || header.layer_size.1 != size.1 || header.deep {
         return Err(invalid(format!(
@@ -223,12 +238,23 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
             size.1
         )));
     }
-    for (name, ty) in SUM.iter().chain(&ODD).map(|n| (*n, SampleType::F32)).chain([
-        (TAKEN, SampleType::U32),
-        (KEPT, SampleType::U32),
-        (ODD_KEPT, SampleType::U32),
-        (CONVERGED, SampleType::U32),
-    ]) {
+    let aov_channels: &[&str] = if has_aovs {
+        &[&ALBEDO[..], &NORMAL[..]].concat()
+    } else {
+        &[]
+    };
+    for (name, ty) in SUM
+        .iter()
+        .chain(&ODD)
+        .chain(aov_channels)
+        .map(|n| (*n, SampleType::F32))
+        .chain([
+            (TAKEN, SampleType::U32),
+            (KEPT, SampleType::U32),
+            (ODD_KEPT, SampleType::U32),
+            (CONVERGED, SampleType::U32),
+        ])
+    {
         let found = header.channels.list.iter().find(|c| c.name == *name);
         match found {
             Some(c) if c.sample_type == ty => {}
@@ -284,6 +310,16 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
         odd: vec3s(&ODD)?,
         odd_kept: u32s(ODD_KEPT)?,
         converged: converged.into_iter().map(|c| c == 1).collect(),
+        albedo: if has_aovs {
+            vec3s(&ALBEDO)?
+        } else {
+            vec![Vec3::ZERO; size.0 * size.1]
+        },
+        normal: if has_aovs {
+            vec3s(&NORMAL)?
+        } else {
+            vec![Vec3::ZERO; size.0 * size.1]
+        },
     };
     accumulation.validate(meta.spp).map_err(invalid)?;
     if let Some(set) = &meta.shard {
@@ -309,12 +345,12 @@ fn parse_meta(
             .map_err(|_| format!("attribute {key} = {value:?} is not a valid number"))
     }
     let format = text("caustic.format")?;
-    if format != CHECKPOINT_FORMAT && format != CHECKPOINT_FORMAT_2 {
+    if format != CHECKPOINT_FORMAT && format != CHECKPOINT_FORMAT_3 && format != CHECKPOINT_FORMAT_2 {
         return Err(format!(
-            "format {format:?}, this caustic reads {CHECKPOINT_FORMAT:?} and {CHECKPOINT_FORMAT_2:?}"
+            "format {format:?}, this caustic reads {CHECKPOINT_FORMAT:?}, {CHECKPOINT_FORMAT_3:?} and {CHECKPOINT_FORMAT_2:?}"
         ));
     }
-    let current = format == CHECKPOINT_FORMAT;
+    let current = format != CHECKPOINT_FORMAT_2;
     let has = |key: &str| attributes.keys().any(|k| *k == *key);
     let output = if current {
         let tone_map = match text("caustic.tonemap")?.as_str() {
@@ -373,6 +409,8 @@ mod tests {
             a.odd[i] = Vec3::new(0.05 + i as f32 / 7.0, 3.0e-8 * i as f32, 99.5);
             a.odd_kept[i] = a.kept[i].min(a.taken[i] / 2);
             a.converged[i] = i % 3 == 0;
+            a.albedo[i] = Vec3::new(0.3 + i as f32 / 11.0, 1.0e-6 * i as f32, 0.7);
+            a.normal[i] = Vec3::new(-0.25 * i as f32, 0.5, 1.0 / (i + 1) as f32);
         }
         let meta = CheckpointMeta {
             width: 5,

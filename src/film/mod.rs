@@ -5,6 +5,7 @@
 
 pub mod accum;
 pub mod checkpoint;
+pub mod denoise;
 pub mod output;
 pub mod shard;
 pub mod tonemap;

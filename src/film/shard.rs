@@ -293,7 +293,13 @@ impl ShardSet {
         for (i, owned) in mask.into_iter().enumerate() {
             let (x, y) = (i % acc.width as usize, i / acc.width as usize);
             if !owned {
-                if acc.taken[i] != 0 || acc.kept[i] != 0 || acc.sum[i] != Vec3::ZERO || acc.converged[i] {
+                if acc.taken[i] != 0
+                    || acc.kept[i] != 0
+                    || acc.sum[i] != Vec3::ZERO
+                    || acc.albedo[i] != Vec3::ZERO
+                    || acc.normal[i] != Vec3::ZERO
+                    || acc.converged[i]
+                {
                     return Err(format!("pixel ({x}, {y}) belongs to another shard but holds samples"));
                 }
                 continue;
@@ -366,6 +372,8 @@ pub fn merge_into(merged: &mut Accumulation, part: &Accumulation, set: &ShardSet
                     merged.odd[i] = part.odd[i];
                     merged.odd_kept[i] = part.odd_kept[i];
                     merged.converged[i] = part.converged[i];
+                    merged.albedo[i] = part.albedo[i];
+                    merged.normal[i] = part.normal[i];
                 }
             }
         }
@@ -373,6 +381,8 @@ pub fn merge_into(merged: &mut Accumulation, part: &Accumulation, set: &ShardSet
             for i in 0..merged.len() {
                 merged.sum[i] = Vec3::from(Vec3A::from(merged.sum[i]) + Vec3A::from(part.sum[i]));
                 merged.odd[i] = Vec3::from(Vec3A::from(merged.odd[i]) + Vec3A::from(part.odd[i]));
+                merged.albedo[i] = Vec3::from(Vec3A::from(merged.albedo[i]) + Vec3A::from(part.albedo[i]));
+                merged.normal[i] = Vec3::from(Vec3A::from(merged.normal[i]) + Vec3A::from(part.normal[i]));
                 merged.kept[i] += part.kept[i];
                 merged.odd_kept[i] += part.odd_kept[i];
                 merged.taken[i] = merged.taken[i].max(part.taken[i]);

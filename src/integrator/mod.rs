@@ -2,6 +2,7 @@
 //! Whitted integrator, the path tracer and its light sampling, the progressive deterministic render loop and the
 //! debug overlays.
 
+pub mod aov;
 pub mod debug;
 pub mod fog;
 pub mod lights;

@@ -13,6 +13,7 @@
 //! number of threads. A render can be stopped (cancel flag, sample limit) at
 //! any pixel boundary; pixels never hold part of a sample.
 
+use super::aov::{AovTracer, AOV_SAMPLES};
 use super::path::PathTracer;
 use super::photon::{
     build_photon_map, photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache,
@@ -390,6 +391,7 @@ pub fn render_progressive(
         }
         IntegratorKind::Path => Tracer::Path(PathTracer::new(scene, accel, plan)),
     };
+    let aovs = AovTracer::new(scene, accel);
     let stop = Stop {
         cancel: control.cancel,
         deadline: control.deadline,
@@ -423,7 +425,7 @@ pub fn render_progressive(
             .map(|state| {
                 let work = {
                     let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
-                    render_tile_pass(scene, &integrator, plan, &mut state, target, &stop)
+                    render_tile_pass(scene, &integrator, &aovs, plan, &mut state, target, &stop)
                 };
                 if work.samples > 0 {
                     let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
@@ -586,18 +588,20 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
     stopped
 }
 
-/// Brings every pixel of the tile to `target` samples (pixels already there
-/// are left alone), in increasing sample index. Stops before the next pixel
-/// once `cancel` is set.
 /// The integrator a render uses.
 enum Tracer<'a> {
     Whitted(Whitted<'a>),
     Path(PathTracer<'a>),
 }
 
+/// Brings every pixel of the tile to `target` samples (pixels already there
+/// are left alone), in increasing sample index, the first [`AOV_SAMPLES`]
+/// of them also tracing the albedo and normal. Stops before the next pixel
+/// once `cancel` is set.
 fn render_tile_pass(
     scene: &Scene,
     integrator: &Tracer,
+    aovs: &AovTracer,
     plan: &RenderPlan,
     state: &mut TileState,
     target: u32,
@@ -629,6 +633,7 @@ fn render_tile_pass(
             let mut sum = Vec3A::from(acc.sum[i]);
             let mut odd = Vec3A::from(acc.odd[i]);
             let (mut kept, mut odd_kept) = (acc.kept[i], acc.odd_kept[i]);
+            let (mut albedo, mut normal) = (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i]));
             for k in first..target {
                 let mut rng = Sampler::new(plan.sampler, seed, pixel, k as u64);
                 let sub = match plan.sampler {
@@ -641,6 +646,12 @@ fn render_tile_pass(
                 };
                 let ray = camera.ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 out.rays.camera += 1;
+                if k < AOV_SAMPLES {
+                    // No random numbers: the sample below is unchanged.
+                    let (a, n) = aovs.trace(&ray);
+                    albedo += a;
+                    normal += n;
+                }
                 let l = match integrator {
                     Tracer::Whitted(whitted) => {
                         let mut ctx = SampleContext {
@@ -672,6 +683,8 @@ fn render_tile_pass(
             acc.odd[i] = Vec3::from(odd);
             acc.kept[i] = kept;
             acc.odd_kept[i] = odd_kept;
+            acc.albedo[i] = Vec3::from(albedo);
+            acc.normal[i] = Vec3::from(normal);
             acc.taken[i] = target;
         }
     }

@@ -60,8 +60,9 @@ fn fingerprint_of(
         h.update(bytes);
     };
     // The per-pixel layout the samples are kept in; format 3 only added
-    // header attributes, so its fingerprints equal format 2's (whose
-    // checkpoints still resume).
+    // header attributes and format 4 the AOV sums (the image's samples are
+    // unchanged), so their fingerprints equal format 2's (whose checkpoints
+    // still resume).
     field("format", crate::film::checkpoint::CHECKPOINT_FORMAT_2.as_bytes());
     field("version", env!("CARGO_PKG_VERSION").as_bytes());
     if let Some(purpose) = purpose {
@@ -71,9 +72,18 @@ fn fingerprint_of(
     // identifies values exactly.
     let settings = RenderSettings {
         output: crate::film::OutputSettings::default(),
+        denoise: false,
         ..settings.clone()
     };
-    field("settings", format!("{settings:?}").as_bytes());
+    // Denoising changes no sample: its field (the last) is left out of the
+    // text, which stays that of the settings before it existed (older
+    // checkpoints still resume).
+    let text = format!("{settings:?}");
+    let text = match text.strip_suffix(", denoise: false }") {
+        Some(head) => format!("{head} }}"),
+        None => text,
+    };
+    field("settings", text.as_bytes());
     field("camera", format!("{:?}", scene.camera).as_bytes());
     field("materials", format!("{:?}", scene.materials).as_bytes());
     field("lights", format!("{:?}", scene.lights).as_bytes());
@@ -136,6 +146,7 @@ mod tests {
         let mut s = scene();
         s.settings.output.exposure = 2.0;
         s.settings.output.tone_map = crate::film::ToneMap::Clamp;
+        s.settings.denoise = true;
         assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
         // Everything else does.
         let mut s = scene();

@@ -29,6 +29,8 @@ pub struct MergeRequest {
     pub exr: Option<PathBuf>,
     /// A new partial holding the shards of all the inputs.
     pub partial: Option<PathBuf>,
+    /// Denoise the PNG and the EXR's main layer (the partial stays raw).
+    pub denoise: bool,
 }
 
 /// What a merge did.
@@ -40,6 +42,8 @@ pub struct MergeReport {
     pub accumulation: Accumulation,
     /// The files written.
     pub written: Vec<String>,
+    /// What denoising cost, when the image was denoised.
+    pub denoise: Option<crate::film::denoise::DenoiseStats>,
 }
 
 fn invalid(message: String) -> JobError {
@@ -50,6 +54,9 @@ fn invalid(message: String) -> JobError {
 pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
     if request.partials.is_empty() {
         return Err(invalid("caustic merge: no partials given".to_string()));
+    }
+    if request.denoise {
+        crate::film::denoise::require()?;
     }
     if request.png.is_none() && request.exr.is_none() && request.partial.is_none() {
         return Err(invalid(
@@ -186,13 +193,19 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
         ..first.clone()
     };
     let mut written = Vec::new();
-    let film_image = merged.to_film();
+    let raw = merged.to_film();
+    let (film_image, noisy, denoise) = if request.denoise && (request.png.is_some() || request.exr.is_some()) {
+        let (image, stats) = super::denoise_accumulation(&raw, &merged, crate::film::denoise::DenoiseQuality::High)?;
+        (image, Some(raw), Some(stats))
+    } else {
+        (raw, None, None)
+    };
     if let Some(p) = &request.png {
         film::write_png(p, &film_image, &meta.output)?;
         written.push(p.display().to_string());
     }
     if let Some(p) = &request.exr {
-        write_exr_output(p, &film_image, &merged)?;
+        write_exr_output(p, &film_image, &merged, noisy.as_ref())?;
         written.push(p.display().to_string());
     }
     if let Some(p) = &request.partial {
@@ -203,6 +216,7 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
         meta,
         accumulation: merged,
         written,
+        denoise,
     })
 }
 

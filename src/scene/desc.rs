@@ -202,6 +202,8 @@ pub struct RenderDesc {
     pub min_spp: Option<Spanned<u32>>,
     /// What the noise threshold bounds.
     pub adaptive_goal: Option<AdaptiveGoalName>,
+    /// Denoise the final image (Open Image Denoise).
+    pub denoise: Option<bool>,
 }
 
 /// Adaptive goal names.

@@ -134,6 +134,10 @@ pub struct RenderSettings {
     /// the water region. Kept here rather than in [`Scene`] so that code
     /// building scenes by hand needs no change (`..Default::default()`).
     pub medium: Option<Medium>,
+    /// Denoise the final image with Open Image Denoise (`[render] denoise`,
+    /// `--denoise`): what is written, not what is sampled (not in the
+    /// fingerprint). Kept last: the fingerprint relies on it.
+    pub denoise: bool,
 }
 
 /// Photon map settings (the `[photons]` table). The photon pass runs only
@@ -195,6 +199,7 @@ impl Default for RenderSettings {
             sharing: SampleSharing::Spread,
             photons: PhotonSettings::default(),
             medium: None,
+            denoise: false,
         }
     }
 }

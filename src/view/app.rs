@@ -54,6 +54,10 @@ struct LayerKey {
     boxes: Option<(u32, usize)>,
 }
 
+/// What the shown texture was made from: generation, pass, denoised pass,
+/// display settings, photon and box views, box depth.
+type ShownKey = (u64, u32, Option<u32>, OutputSettings, bool, bool, u32);
+
 /// The viewer application: the core, the display state, and the texture.
 pub struct ViewerApp {
     /// Scene, render thread and frames.
@@ -65,7 +69,7 @@ pub struct ViewerApp {
     /// Where the image was drawn in the last frame (points).
     pub image_rect: Option<egui::Rect>,
     texture: Option<egui::TextureHandle>,
-    shown: Option<(u64, u32, OutputSettings, bool, bool, u32)>,
+    shown: Option<ShownKey>,
     layer: Option<(LayerKey, Film)>,
     loading: Option<Receiver<Result<EditableScene, String>>>,
     open_path: String,
@@ -212,6 +216,11 @@ impl ViewerApp {
                     f.mrays_per_second
                 ));
                 ui.label(format!("elapsed {:.2} s", f.since_request.as_secs_f64()));
+                if let Some((g, pass, _, time)) = self.core.denoised.as_ref().filter(|_| self.core.denoise) {
+                    if *g == f.generation {
+                        ui.label(format!("denoised pass {pass} in {:.0} ms", time.as_secs_f64() * 1e3));
+                    }
+                }
             }
             None => {
                 ui.label("rendering…");
@@ -295,6 +304,10 @@ impl ViewerApp {
                 .text("photons"),
         );
         ui.checkbox(&mut self.core.preview, "fast preview pass after a change");
+        ui.add_enabled_ui(film::denoise::available(), |ui| {
+            ui.checkbox(&mut self.core.denoise, "denoise (Open Image Denoise)")
+                .on_disabled_hover_text("this build lacks the `denoise` feature");
+        });
         ui.horizontal(|ui| {
             ui.radio_value(&mut self.display.output.tone_map, ToneMap::Aces, "ACES");
             ui.radio_value(&mut self.display.output.tone_map, ToneMap::Clamp, "clamp");
@@ -417,17 +430,18 @@ impl ViewerApp {
         }
     }
 
-    /// Writes the current image (without debug layers); returns the message.
+    /// Writes the current image as shown (denoised when denoising is on;
+    /// without debug layers); returns the message.
     pub fn save_image(&self, exr: bool) -> String {
-        let Some(f) = &self.core.frame else {
+        let (Some(f), Some(shown)) = (&self.core.frame, self.core.shown_film()) else {
             return "no image yet".into();
         };
         let mut p = PathBuf::from(self.image_path.trim());
         p.set_extension(if exr { "exr" } else { "png" });
         let r = if exr {
-            film::write_exr(&p, &f.film)
+            film::write_exr(&p, shown)
         } else {
-            film::write_png(&p, &f.film, &self.display.output)
+            film::write_png(&p, shown, &self.display.output)
         };
         match r {
             Ok(()) => format!("{} spp image saved to {}", f.spp, p.display()),
@@ -472,9 +486,16 @@ impl ViewerApp {
     fn update_texture(&mut self, ctx: &egui::Context) {
         let Some(frame) = &self.core.frame else { return };
         let d = &self.display;
+        let denoised_pass = self
+            .core
+            .denoised
+            .as_ref()
+            .filter(|x| self.core.denoise && x.0 == frame.generation)
+            .map(|x| x.1);
         let key = (
             frame.generation,
             frame.pass,
+            denoised_pass,
             d.output,
             d.show_photons,
             d.show_boxes,
@@ -484,9 +505,9 @@ impl ViewerApp {
         if self.shown.as_ref() == Some(&key) && !layer_changed && self.texture.is_some() {
             return;
         }
-        let Some(frame) = &self.core.frame else { return };
+        let Some(film) = self.core.shown_film() else { return };
         let (w, h) = self.core.size;
-        let mut rgba = display_rgba(&frame.film, &self.display.output, w, h);
+        let mut rgba = display_rgba(film, &self.display.output, w, h);
         if let Some((_, layer)) = &self.layer {
             composite(&mut rgba, layer);
         }

@@ -18,11 +18,16 @@ pub use orbit::Orbit;
 pub use worker::{Frame, NodeBoxes, RenderWorker, ViewRequest, WorkerEvent};
 
 use crate::accel::{AccelKind, AccelOptions};
+use crate::film::Film;
 use crate::integrator::photon::PhotonMap;
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+/// With denoising on, the image is denoised after this many passes (and
+/// after the last one).
+pub const DENOISE_EVERY_PASSES: u32 = 4;
 
 /// The viewer's default image size.
 pub const DEFAULT_SIZE: (u32, u32) = (960, 540);
@@ -49,6 +54,12 @@ pub struct ViewerCore {
     pub kd_boxes: Option<(u32, NodeBoxes)>,
     /// What the render thread is doing, or its last error.
     pub status: String,
+    /// Show the image denoised (Open Image Denoise, on the render thread
+    /// every [`DENOISE_EVERY_PASSES`] passes and at the last).
+    pub denoise: bool,
+    /// The newest denoised frame: generation, pass, image, filter time.
+    pub denoised: Option<(u64, u32, Arc<Film>, Duration)>,
+    denoise_asked: Option<(u64, u32)>,
     /// Time from the last change to its first image.
     pub last_latency: Option<Duration>,
     worker: RenderWorker,
@@ -74,6 +85,9 @@ impl ViewerCore {
             photon_map: None,
             kd_boxes: None,
             status: String::new(),
+            denoise: false,
+            denoised: None,
+            denoise_asked: None,
             last_latency: None,
             worker: RenderWorker::spawn(wake),
             generation: 0,
@@ -204,11 +218,58 @@ impl ViewerCore {
                     self.kd_boxes = Some((depth, boxes));
                 }
                 WorkerEvent::KdBoxes { .. } => {}
+                WorkerEvent::Denoised {
+                    generation,
+                    pass,
+                    film,
+                    time,
+                } if generation == self.generation => {
+                    self.denoised = Some((generation, pass, film, time));
+                    new_image |= self.denoise;
+                }
+                WorkerEvent::Denoised { .. } => {}
                 WorkerEvent::Status(s) => self.status = s,
                 WorkerEvent::Error(e) => self.status = format!("error: {e}"),
             }
         }
+        self.ask_denoise();
         new_image
+    }
+
+    /// With denoising on, asks the render thread to denoise the current
+    /// frame once [`DENOISE_EVERY_PASSES`] passes have gone by since the
+    /// last one asked for (at once for a new scene version, and for the
+    /// last pass).
+    fn ask_denoise(&mut self) {
+        let Some(f) = self
+            .frame
+            .as_ref()
+            .filter(|f| f.generation == self.generation && f.guides.is_some())
+        else {
+            return;
+        };
+        if !self.denoise || !crate::film::denoise::available() {
+            return;
+        }
+        let due = match self.denoise_asked {
+            Some((g, p)) if g == f.generation => f.pass >= p + DENOISE_EVERY_PASSES || (f.complete && f.pass != p),
+            _ => true,
+        };
+        if due {
+            self.denoise_asked = Some((f.generation, f.pass));
+            self.worker.request_denoise(f.clone());
+        }
+    }
+
+    /// The image to show: the newest denoised one of the current scene
+    /// version when denoising is on and there is one, else the newest frame.
+    pub fn shown_film(&self) -> Option<&Arc<Film>> {
+        let denoised = self
+            .denoised
+            .as_ref()
+            .filter(|d| self.denoise && d.0 == self.generation)
+            .map(|d| &d.2);
+        denoised.or(self.frame.as_ref().map(|f| &f.film))
     }
 
     /// Waits until the current generation's image has `spp` samples per

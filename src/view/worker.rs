@@ -10,8 +10,13 @@
 //! checked before every pixel) and restarts from an empty accumulation, so
 //! no image ever holds samples of two scene versions; frames carry their
 //! request's generation and the UI drops stale ones.
+//!
+//! Denoising ([`RenderWorker::request_denoise`]) also runs on this thread,
+//! between two passes (only the newest request is served), so the window
+//! never waits for it.
 
 use crate::accel::{self, kdtree::KdTreeAccel, Accel, AccelKind, AccelOptions};
+use crate::film::denoise::{self, DenoiseQuality, Guides};
 use crate::film::{Accumulation, Film};
 use crate::integrator::photon::PhotonMap;
 use crate::integrator::plan::PhotonPlan;
@@ -76,6 +81,9 @@ pub struct Frame {
     pub accel_builds: u32,
     /// Photon passes the render thread has run so far.
     pub photon_passes: u32,
+    /// The albedo and normal images of the pass (for the denoiser; none
+    /// for the preview).
+    pub guides: Option<Arc<(Film, Film)>>,
 }
 
 /// What the worker reports.
@@ -98,6 +106,17 @@ pub enum WorkerEvent {
         /// Boxes and depths.
         boxes: NodeBoxes,
     },
+    /// A frame denoised (answer to [`RenderWorker::request_denoise`]).
+    Denoised {
+        /// The frame's generation.
+        generation: u64,
+        /// The frame's pass.
+        pass: u32,
+        /// The denoised image.
+        film: Arc<Film>,
+        /// Time the filter took.
+        time: Duration,
+    },
     /// What the worker is doing (building the accelerator, tracing photons).
     Status(String),
     /// A request could not be rendered.
@@ -111,6 +130,7 @@ enum Command {
         scene: Arc<Scene>,
         depth: u32,
     },
+    Denoise(Box<Frame>),
     Quit,
 }
 
@@ -159,6 +179,12 @@ impl RenderWorker {
     /// render thread; answered with [`WorkerEvent::KdBoxes`]).
     pub fn request_kd_boxes(&self, geometry: u64, scene: Arc<Scene>, depth: u32) {
         let _ = self.commands.send(Command::KdBoxes { geometry, scene, depth });
+    }
+
+    /// Asks for `frame` denoised (answered with [`WorkerEvent::Denoised`],
+    /// or an error; only the newest request waiting is served).
+    pub fn request_denoise(&self, frame: Frame) {
+        let _ = self.commands.send(Command::Denoise(Box::new(frame)));
     }
 
     /// The events that arrived since the last call.
@@ -256,15 +282,21 @@ impl WorkerState {
         }
     }
 
+    /// Answers the box requests and the newest denoise request waiting.
     fn serve_box_requests(&mut self, send: &dyn Fn(WorkerEvent)) {
         let mut rest = VecDeque::new();
+        let mut denoise = None;
         while let Some(c) = self.queue.pop_front() {
             match c {
                 Command::KdBoxes { geometry, scene, depth } => self.kd_boxes(geometry, &scene, depth, send),
+                Command::Denoise(frame) => denoise = Some(frame),
                 other => rest.push_back(other),
             }
         }
         self.queue = rest;
+        if let Some(frame) = denoise {
+            denoise_frame(&frame, send);
+        }
     }
 
     fn kd_boxes(&mut self, geometry: u64, scene: &Scene, depth: u32, send: &dyn Fn(WorkerEvent)) {
@@ -416,6 +448,31 @@ fn run_pass(
         complete: out.complete,
         accel_builds: 0,
         photon_passes: 0,
+        guides: None,
+    };
+    let frame = Frame {
+        guides: (!frame.preview).then(|| {
+            let acc = &out.accumulation;
+            Arc::new((acc.albedo_film(), acc.normal_film()))
+        }),
+        ..frame
     };
     Some((frame, out.accumulation))
+}
+
+/// Denoises `frame` (balanced quality: a preview) and sends the result.
+fn denoise_frame(frame: &Frame, send: &dyn Fn(WorkerEvent)) {
+    let guides = frame
+        .guides
+        .as_deref()
+        .map(|(albedo, normal)| Guides { albedo, normal });
+    match denoise::denoise(&frame.film, guides, DenoiseQuality::Balanced) {
+        Ok((film, stats)) => send(WorkerEvent::Denoised {
+            generation: frame.generation,
+            pass: frame.pass,
+            film: Arc::new(film),
+            time: stats.time,
+        }),
+        Err(e) => send(WorkerEvent::Error(e.to_string())),
+    }
 }

@@ -23,7 +23,9 @@
 //! # What is measured
 //!
 //! `seconds` is the wall time of `integrator::render`: the photon pass plus
-//! the image, on the current rayon pool. Scene loading and the accelerator
+//! the image, on the current rayon pool, and for a denoised curve
+//! (`/denoised`, `--denoise`) the denoising of the image with Open Image
+//! Denoise, guided by its albedo and normal. Scene loading and the accelerator
 //! build are excluded (the build is timed once per curve and reported as
 //! `build_seconds`), as is the error computation.
 //!
@@ -124,6 +126,9 @@ pub enum ConvergeError {
     /// The curve list is empty or repeats a curve.
     #[error("curves: {0}")]
     Curves(String),
+    /// A denoised curve's image could not be denoised.
+    #[error(transparent)]
+    Denoise(#[from] crate::film::denoise::DenoiseError),
     /// The relMSE ε is not a positive finite number.
     #[error("--epsilon {0}: must be a positive finite number")]
     Epsilon(f64),

@@ -6,6 +6,7 @@ use super::budget::Budget;
 use super::metrics::{check_same_size, error_metrics, ErrorMetrics};
 use super::ConvergeError;
 use crate::accel::{self, Accel, AccelKind, AccelOptions};
+use crate::film::denoise::DenoiseQuality;
 use crate::film::Film;
 use crate::integrator::{render, RenderPlan};
 use crate::limits::{check_image_limits, check_photon_count, MAX_SPP};
@@ -25,6 +26,9 @@ pub struct CurveSpec {
     pub sampler: Option<SamplerKind>,
     /// Adaptive sampling: the curve's points are noise thresholds, not spp.
     pub adaptive: bool,
+    /// Each image is denoised (Open Image Denoise) before it is measured,
+    /// the denoising timed with the render.
+    pub denoise: bool,
 }
 
 impl CurveSpec {
@@ -35,6 +39,7 @@ impl CurveSpec {
             gather: None,
             sampler: None,
             adaptive: false,
+            denoise: false,
         }
     }
 
@@ -54,7 +59,21 @@ impl CurveSpec {
         if self.adaptive {
             name.push_str("/adaptive");
         }
+        if self.denoise {
+            name.push_str("/denoised");
+        }
         name
+    }
+
+    /// These curves, each followed by its denoised copy when `denoise`.
+    pub fn with_denoise(curves: &[CurveSpec], denoise: bool) -> Vec<CurveSpec> {
+        curves
+            .iter()
+            .flat_map(|&c| {
+                let copy = denoise.then_some(CurveSpec { denoise: true, ..c });
+                std::iter::once(c).chain(copy)
+            })
+            .collect()
     }
 
     /// Every accelerator crossed with every gather mode (`gathers` empty:
@@ -220,7 +239,11 @@ impl Renderer<'_> {
     fn warm_up(&mut self, accel: &dyn Accel, curve: &CurveSpec) {
         let photons = self.default_photons(1).min(WARM_UP_PHOTONS);
         let plan = self.configure(curve, 1, photons, None);
-        render::render(&self.scene, accel, &plan, &|_, _| {});
+        let out = render::render(&self.scene, accel, &plan, &|_, _| {});
+        if curve.denoise {
+            // The first filter loads OIDN's device module.
+            let _ = denoised(&out);
+        }
     }
 
     fn render(
@@ -234,6 +257,10 @@ impl Renderer<'_> {
         let plan = self.configure(curve, spp, photons, threshold);
         let start = Instant::now();
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
+        let film = match curve.denoise {
+            true => denoised(&out)?,
+            false => out.film.clone(),
+        };
         let photon_seconds_of = |o: &render::RenderOutput| {
             o.stats
                 .photons
@@ -252,13 +279,16 @@ impl Renderer<'_> {
             }
             let again = Instant::now();
             let repeat = render::render(&self.scene, accel, &plan, &|_, _| {});
+            if curve.denoise {
+                denoised(&repeat)?;
+            }
             let s = again.elapsed().as_secs_f64();
             if s < seconds {
                 seconds = s;
                 photon_seconds = photon_seconds_of(&repeat);
             }
         }
-        let error = error_metrics(&out.film, self.reference, self.epsilon)?;
+        let error = error_metrics(&film, self.reference, self.epsilon)?;
         // An adaptive render reports the mean samples per pixel it took.
         let spp = match threshold {
             None => spp,
@@ -272,6 +302,12 @@ impl Renderer<'_> {
             error,
         })
     }
+}
+
+/// The render's image denoised at high quality, guided by its albedo and normal.
+fn denoised(out: &render::RenderOutput) -> Result<Film, ConvergeError> {
+    let (film, _) = crate::job::denoise_accumulation(&out.film, &out.accumulation, DenoiseQuality::High)?;
+    Ok(film)
 }
 
 fn check_budget(width: u32, height: u32, spp: u32, photons: u64) -> Result<(), String> {

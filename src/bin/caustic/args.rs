@@ -179,6 +179,11 @@ pub struct RenderArgs {
     /// Most samples per pixel (the same as --spp).
     #[arg(long, conflicts_with = "spp")]
     pub max_spp: Option<u32>,
+    /// Denoise the PNG and the EXR's main layer with Open Image Denoise,
+    /// guided by the albedo and normal images (the raw image stays in the
+    /// EXR as noisy.R/G/B; checkpoints stay raw). Also `[render] denoise = true`.
+    #[arg(long)]
+    pub denoise: bool,
     /// Render progressively until this many seconds have passed, then write
     /// the image so far (with --noise-threshold: whichever comes first).
     #[arg(long)]
@@ -318,6 +323,10 @@ pub struct MergeArgs {
     /// Write the merged shards as a new partial (any subset: tree reductions).
     #[arg(long)]
     pub partial: Option<PathBuf>,
+    /// Denoise the PNG and the EXR's main layer (Open Image Denoise; the raw
+    /// image stays in the EXR as noisy.R/G/B).
+    #[arg(long)]
+    pub denoise: bool,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -424,6 +433,10 @@ pub struct ConvergeArgs {
     /// halved from 0.5 until the target is met).
     #[arg(long)]
     pub adaptive_search: bool,
+    /// Add a denoised copy of every curve (`/denoised`: each image through
+    /// Open Image Denoise before it is measured, the filter's time included).
+    #[arg(long)]
+    pub denoise: bool,
     /// Most samples per pixel of an adaptive render.
     #[arg(long)]
     pub max_spp: Option<u32>,

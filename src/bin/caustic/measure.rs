@@ -66,6 +66,10 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
     for (k, v) in &s.details {
         println!("            {k}: {v}");
     }
+    match caustic::film::denoise::library() {
+        Some((version, source)) => println!("denoiser    Open Image Denoise {version} ({source})"),
+        None => println!("denoiser    none (built without the `denoise` feature)"),
+    }
     if let Some(peak) = caustic::memory::peak_rss_bytes() {
         println!(
             "peak memory {:.1} MiB resident (scene + accelerator)",
@@ -170,6 +174,9 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
             )));
         }
     }
+    if args.denoise {
+        film::denoise::require().map_err(bad_input)?;
+    }
     let max_spp = args.max_spp.unwrap_or(1024);
     caustic::limits::check_image_limits(scene.settings.width, scene.settings.height, max_spp)
         .map_err(|e| bad_input(anyhow::anyhow!("--max-spp {max_spp}: {e}")))?;
@@ -184,10 +191,13 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     }
     let options = ConvergeOptions {
         budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
-        curves: CurveSpec::with_samplers(
-            &CurveSpec::cross(&accels, &gathers),
-            &samplers,
-            !args.adaptive.is_empty() || args.adaptive_search,
+        curves: CurveSpec::with_denoise(
+            &CurveSpec::with_samplers(
+                &CurveSpec::cross(&accels, &gathers),
+                &samplers,
+                !args.adaptive.is_empty() || args.adaptive_search,
+            ),
+            args.denoise,
         ),
         photons_per_spp: args.photons_per_spp,
         epsilon: args.epsilon,

@@ -44,6 +44,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             noise_threshold: args.noise_threshold,
             min_spp: args.min_spp,
             adaptive_goal: args.adaptive_goal.map(Into::into),
+            denoise: args.denoise.then_some(true),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),
@@ -126,6 +127,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
         png: args.output,
         exr: args.exr,
         partial: args.partial,
+        denoise: args.denoise,
     };
     let report = job::merge_partials(&request).map_err(job_failure)?;
     if !args.quiet {
@@ -139,6 +141,9 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
                 m.seed,
                 report.accumulation.samples_taken()
             );
+        }
+        if let Some(d) = &report.denoise {
+            println!("denoised in {:.3} s", d.time.as_secs_f64());
         }
         println!("written: {}", report.written.join(", "));
     }
@@ -271,6 +276,19 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
         build.as_secs_f64(),
         report.render_time.as_secs_f64()
     );
+    if let Some(d) = &report.denoise {
+        let memory = d
+            .peak_memory
+            .map_or("not measured".to_string(), caustic::memory::format_bytes);
+        println!(
+            "denoised: Open Image Denoise {} (high quality, albedo and normal) in {:.3} s, peak memory +{memory} \
+             for {}×{}",
+            film::denoise::library().map_or("?", |l| l.0),
+            d.time.as_secs_f64(),
+            report.plan.width,
+            report.plan.height
+        );
+    }
     let skipped: Vec<String> = report.plan.skipped().iter().map(ToString::to_string).collect();
     println!(
         "skipped: {}",

@@ -113,6 +113,7 @@ impl Ctx<'_> {
             },
             photons: d.photons,
             medium: None,
+            denoise: r.denoise.unwrap_or(d.denoise),
             noise_threshold,
             min_spp,
             adaptive_goal: match r.adaptive_goal {

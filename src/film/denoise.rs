@@ -1,0 +1,259 @@
+//! Denoising with Intel Open Image Denoise (OIDN, feature `denoise`): its
+//! `RT` filter on the linear HDR film, guided by the albedo and normal
+//! images (see `integrator::aov`). Those are noise-free in caustic (each
+//! sample follows perfect specular surfaces deterministically), so they are
+//! passed as clean auxiliaries and never prefiltered.
+//!
+//! OIDN's CPU device runs on TBB: Embree's when both are linked (the
+//! dynamic linker binds OIDN's TBB calls to the first TBB loaded, see
+//! docs/denoise.md), else the one beside OIDN. Its result may differ in the
+//! last bits between machines (the kernels chosen depend on the instruction
+//! set; on one machine it was the same bits for 1 and 2 cores); caustic's
+//! determinism holds for the raw image, kept beside the denoised one.
+
+use super::Film;
+use crate::math::Vec3;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// Quality of the filter: OIDN's `high` for final images, `balanced` (about
+/// twice as fast) for the viewer's previews.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseQuality {
+    /// OIDN's highest quality.
+    High,
+    /// Faster, for interactive previews.
+    Balanced,
+}
+
+/// The guides of the filter: per-pixel albedo in [0, 1] and unit shading
+/// normals (zero where the camera ray escaped).
+#[derive(Clone, Copy, Debug)]
+pub struct Guides<'a> {
+    /// First non-specular surface's reflectance.
+    pub albedo: &'a Film,
+    /// Its shading normal, facing the camera ray.
+    pub normal: &'a Film,
+}
+
+/// What denoising cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DenoiseStats {
+    /// Wall time (device creation included).
+    pub time: Duration,
+    /// Growth of the process's peak resident memory while denoising (`None`
+    /// where the operating system does not report it).
+    pub peak_memory: Option<u64>,
+}
+
+/// Why an image could not be denoised.
+#[derive(Debug, Error)]
+pub enum DenoiseError {
+    /// This build has no denoiser.
+    #[error(
+        "denoising needs the `denoise` feature (Intel Open Image Denoise), which this build of caustic lacks; \
+         rebuild with `cargo build --release --features denoise`"
+    )]
+    Unavailable,
+    /// OIDN refused or failed.
+    #[error("Open Image Denoise failed: {0}")]
+    Oidn(String),
+    /// The guides are not the film's size.
+    #[error("the albedo and normal images are {0}×{1}, the image {2}×{3}")]
+    Size(u32, u32, u32, u32),
+}
+
+/// True when this build can denoise.
+pub fn available() -> bool {
+    cfg!(feature = "denoise")
+}
+
+/// The OIDN library this build links: `(version, where it came from)`.
+pub fn library() -> Option<(&'static str, &'static str)> {
+    #[cfg(feature = "denoise")]
+    {
+        Some((env!("CAUSTIC_OIDN_VERSION"), env!("CAUSTIC_OIDN_SOURCE")))
+    }
+    #[cfg(not(feature = "denoise"))]
+    {
+        None
+    }
+}
+
+/// Fails with [`DenoiseError::Unavailable`] in a build without the feature
+/// (for callers to refuse `--denoise` before rendering).
+pub fn require() -> Result<(), DenoiseError> {
+    if available() {
+        Ok(())
+    } else {
+        Err(DenoiseError::Unavailable)
+    }
+}
+
+fn flatten(film: &Film, clamp: fn(f32) -> f32) -> Vec<f32> {
+    film.pixels
+        .iter()
+        .flat_map(|p| [clamp(p.x), clamp(p.y), clamp(p.z)])
+        .collect()
+}
+
+/// Denoises `color` (linear HDR), guided by `guides` when given.
+pub fn denoise(
+    color: &Film,
+    guides: Option<Guides>,
+    quality: DenoiseQuality,
+) -> Result<(Film, DenoiseStats), DenoiseError> {
+    if let Some(g) = guides {
+        for f in [g.albedo, g.normal] {
+            if (f.width, f.height) != (color.width, color.height) {
+                return Err(DenoiseError::Size(f.width, f.height, color.width, color.height));
+            }
+        }
+    }
+    let begin = Instant::now();
+    let before = crate::memory::reset_peak_rss()
+        .then(crate::memory::current_rss_bytes)
+        .flatten();
+    // OIDN takes finite, non-negative HDR values; the film holds finite ones.
+    let input = flatten(color, |v| if v.is_finite() { v.max(0.0) } else { 0.0 });
+    let output = run(&input, color.width, color.height, guides, quality)?;
+    let peak_memory = match (before, crate::memory::peak_rss_bytes()) {
+        (Some(b), Some(p)) => Some(p.saturating_sub(b)),
+        _ => None,
+    };
+    let pixels = output.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    Ok((
+        Film {
+            width: color.width,
+            height: color.height,
+            pixels,
+        },
+        DenoiseStats {
+            time: begin.elapsed(),
+            peak_memory,
+        },
+    ))
+}
+
+#[cfg(feature = "denoise")]
+fn run(
+    input: &[f32],
+    width: u32,
+    height: u32,
+    guides: Option<Guides>,
+    quality: DenoiseQuality,
+) -> Result<Vec<f32>, DenoiseError> {
+    let fail = |e: oidn::Error| DenoiseError::Oidn(format!("{}: {}", e.kind().as_str(), e.message()));
+    let device = oidn::Device::cpu().map_err(fail)?;
+    let mut filter = oidn::RayTracing::try_new(&device).map_err(fail)?;
+    filter
+        .hdr(true)
+        .filter_quality(match quality {
+            DenoiseQuality::High => oidn::Quality::High,
+            DenoiseQuality::Balanced => oidn::Quality::Balanced,
+        })
+        .image_dimensions(width as usize, height as usize);
+    let aux = guides.map(|g| {
+        (
+            flatten(g.albedo, |v| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 }),
+            flatten(g.normal, |v| if v.is_finite() { v.clamp(-1.0, 1.0) } else { 0.0 }),
+        )
+    });
+    if let Some((albedo, normal)) = &aux {
+        filter.albedo_normal(albedo, normal).clean_aux(true);
+    }
+    let mut output = vec![0.0f32; input.len()];
+    filter.filter(input, &mut output).map_err(fail)?;
+    Ok(output)
+}
+
+#[cfg(not(feature = "denoise"))]
+fn run(_: &[f32], _: u32, _: u32, _: Option<Guides>, _: DenoiseQuality) -> Result<Vec<f32>, DenoiseError> {
+    Err(DenoiseError::Unavailable)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rng;
+
+    /// A smooth gradient with strong per-pixel noise: the denoised image
+    /// must be much closer to the clean one than the noisy input.
+    #[cfg(feature = "denoise")]
+    #[test]
+    fn denoising_removes_most_of_synthetic_noise() {
+        let (w, h) = (64u32, 48u32);
+        let mut clean = Film::new(w, h);
+        let mut noisy = Film::new(w, h);
+        let mut rng = Rng::new(7, crate::math::rng::Domain::Analysis, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let v = Vec3::new(0.2 + 0.6 * x as f32 / w as f32, 0.5, 0.3 + 0.4 * y as f32 / h as f32);
+                clean.set(x, y, v);
+                // Multiplicative noise with mean 1 (an estimator's kind).
+                let n = Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0;
+                noisy.set(x, y, v * n);
+            }
+        }
+        let albedo = Film {
+            width: w,
+            height: h,
+            pixels: vec![Vec3::splat(0.8); (w * h) as usize],
+        };
+        let normal = Film {
+            width: w,
+            height: h,
+            pixels: vec![Vec3::Z; (w * h) as usize],
+        };
+        let mse = |a: &Film| {
+            a.pixels
+                .iter()
+                .zip(&clean.pixels)
+                .map(|(p, q)| (*p - *q).length_squared())
+                .sum::<f32>()
+                / a.pixels.len() as f32
+        };
+        for guides in [
+            None,
+            Some(Guides {
+                albedo: &albedo,
+                normal: &normal,
+            }),
+        ] {
+            let (out, stats) = denoise(&noisy, guides, DenoiseQuality::High).unwrap();
+            assert_eq!((out.width, out.height), (w, h));
+            assert!(out.pixels.iter().all(|p| p.is_finite()));
+            let (before, after) = (mse(&noisy), mse(&out));
+            assert!(
+                after < before / 10.0,
+                "MSE {before} → {after} (guides: {})",
+                guides.is_some()
+            );
+            assert!(stats.time > Duration::ZERO);
+        }
+    }
+
+    #[cfg(not(feature = "denoise"))]
+    #[test]
+    fn without_the_feature_denoising_names_it() {
+        let film = Film::new(2, 2);
+        let e = denoise(&film, None, DenoiseQuality::High).unwrap_err();
+        assert!(e.to_string().contains("`denoise` feature"), "{e}");
+        assert!(require().is_err() && !available() && library().is_none());
+        let _ = Rng::new(1, crate::math::rng::Domain::Analysis, 0, 0);
+    }
+
+    #[test]
+    fn guides_of_another_size_are_refused() {
+        let film = Film::new(4, 4);
+        let small = Film::new(2, 2);
+        let guides = Guides {
+            albedo: &small,
+            normal: &small,
+        };
+        assert!(matches!(
+            denoise(&film, Some(guides), DenoiseQuality::High),
+            Err(DenoiseError::Size(2, 2, 4, 4))
+        ));
+    }
+}
