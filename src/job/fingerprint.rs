@@ -148,6 +148,10 @@ mod tests {
         s.settings.output.tone_map = crate::film::ToneMap::Clamp;
         s.settings.denoise = true;
         assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        // The denoise field is the settings' last, which the hashed text
+        // leaves out (the text of the settings before it existed).
+        let text = format!("{:?}", RenderSettings::default());
+        assert!(text.ends_with(", denoise: false }"), "{text}");
         // Everything else does.
         let mut s = scene();
         s.settings.seed += 1;
