@@ -38,6 +38,7 @@ pub fn photon_fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) 
         spp: defaults.spp,
         noise_threshold: None,
         min_spp: defaults.min_spp,
+        adaptive_goal: defaults.adaptive_goal,
         sampler: None,
         ..scene.settings.clone()
     };
