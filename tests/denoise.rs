@@ -166,6 +166,7 @@ fn exr_channels(path: &Path) -> HashMap<String, Vec<f32>> {
 }
 
 /// Relative mean squared error of `a` against `b` (ε = 0.01, as `caustic converge`).
+#[cfg(feature = "denoise")]
 fn relmse(a: &[f32], b: &[f32]) -> f64 {
     let e = |x: f32, r: f32| ((x - r) as f64).powi(2) / ((r as f64).powi(2) + 1e-2);
     a.iter().zip(b).map(|(&x, &r)| e(x, r)).sum::<f64>() / a.len() as f64
