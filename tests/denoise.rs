@@ -78,8 +78,13 @@ fn wall_scene(integrator: IntegratorKind) -> Scene {
 }
 
 fn render_acc(scene: &Scene, threads: usize) -> Accumulation {
+    render_acc_aovs(scene, threads, true)
+}
+
+fn render_acc_aovs(scene: &Scene, threads: usize, aovs: bool) -> Accumulation {
     let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(scene);
+    let mut plan = RenderPlan::new(scene);
+    plan.aovs = aovs;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| render(scene, accel.as_ref(), &plan, &|_, _| {}).accumulation)
 }
@@ -137,6 +142,13 @@ fn aovs_are_the_same_for_any_thread_count_and_leave_the_image_alone() {
     let three = render_acc(&scene, 3);
     assert_eq!(one, three, "accumulations (AOV sums included) are bit-identical");
     assert!(one.albedo.iter().any(|a| *a != Vec3::ZERO));
+    let without = render_acc_aovs(&scene, 2, false);
+    assert_eq!(without.sum, one.sum, "the colour does not depend on the AOVs");
+    assert!(without.albedo.iter().all(|a| *a == Vec3::ZERO), "no AOVs unless asked");
+    assert!(
+        !RenderPlan::new(&scene).aovs,
+        "a scene that does not denoise skips them"
+    );
 }
 
 fn exr_channels(path: &Path) -> HashMap<String, Vec<f32>> {

@@ -167,6 +167,11 @@ pub struct RenderPlan {
     /// Keep a coarse copy of every photon's position for the debug
     /// overlay (`--debug photons`); off by default: 6 bytes per photon.
     pub keep_photon_positions: bool,
+    /// Trace the auxiliary images (albedo, normal) in each pixel's first
+    /// samples: an extra camera ray per sample, so only when something
+    /// reads them (denoising, an EXR, a checkpoint or a shard's partial,
+    /// the viewer). `RenderPlan::new` sets it for a scene that denoises.
+    pub aovs: bool,
 }
 
 impl RenderPlan {
@@ -286,6 +291,7 @@ impl RenderPlan {
             photons,
             fog,
             keep_photon_positions: false,
+            aovs: s.denoise,
         }
     }
 

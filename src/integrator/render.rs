@@ -646,7 +646,7 @@ fn render_tile_pass(
                 };
                 let ray = camera.ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 out.rays.camera += 1;
-                if k < AOV_SAMPLES {
+                if plan.aovs && k < AOV_SAMPLES {
                     // No random numbers: the sample below is unchanged.
                     let (a, n) = aovs.trace(&ray);
                     albedo += a;

@@ -462,6 +462,8 @@ impl RenderJob {
     pub fn plan(&self) -> RenderPlan {
         let mut plan = RenderPlan::new(&self.scene);
         plan.keep_photon_positions = matches!(self.debug, Some(DebugView::Photons));
+        // Every EXR this job writes (output, checkpoint, partial) holds them.
+        plan.aovs |= self.exr.is_some() || self.checkpoint.is_some() || self.shard.is_some();
         plan
     }
 

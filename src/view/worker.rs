@@ -356,6 +356,8 @@ impl WorkerState {
         }
         let mut plan = RenderPlan::new(scene);
         plan.keep_photon_positions = true;
+        // The denoise toggle may be switched on at any pass.
+        plan.aovs = true;
         let photon_key = (request.geometry, request.accel, request.photons);
         if self.photons.as_ref().is_none_or(|(k, _)| *k != photon_key) {
             if cancelled() {

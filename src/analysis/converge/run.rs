@@ -232,7 +232,10 @@ impl Renderer<'_> {
         }
         s.noise_threshold = threshold;
         s.min_spp = s.min_spp.min(spp).max(2);
-        RenderPlan::new(&self.scene)
+        let mut plan = RenderPlan::new(&self.scene);
+        // Only the denoised curves pay for the auxiliary images.
+        plan.aovs = curve.denoise;
+        plan
     }
 
     /// One untimed render at 1 spp and at most [`WARM_UP_PHOTONS`] photons.
