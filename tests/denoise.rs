@@ -236,6 +236,8 @@ fn render_denoise_writes_the_denoised_image_and_keeps_the_raw_one() {
         "4",
         "--integrator",
         "path",
+        "--caustics",
+        "path",
         "--accel",
         "kdtree",
     ];
@@ -406,6 +408,8 @@ fn converge_denoise_adds_denoised_curves() {
         "--height",
         "32",
         "--integrator",
+        "path",
+        "--caustics",
         "path",
         "--accel",
         "kdtree",

@@ -273,6 +273,49 @@ impl Bsdf {
         !self.is_black() && !self.has_smooth_lobe()
     }
 
+    /// Has a delta lobe (mirror, smooth glass or metal, a clear coat): the
+    /// path integrator's photon-mapped caustics start at such surfaces.
+    pub fn has_delta_lobe(&self) -> bool {
+        self.lobes()
+            .iter()
+            .any(|(l, _)| l.is_smooth_only() || matches!(l, Lobe::Plastic(_)))
+    }
+
+    /// True when [`sample`](Self::sample) with the same `wo` and `uc` picks
+    /// a delta lobe: over uniform `uc` that happens with probability
+    /// [`delta_probability`](Self::delta_probability), whatever the
+    /// direction sample then gives (a photon that does not pick one is
+    /// stored with its power divided by the complement).
+    pub fn picks_delta(&self, wo: Vec3A, uc: f32) -> bool {
+        let Some((chosen, uc_rest)) = self.choose(uc) else {
+            return false;
+        };
+        let wo = if self.two_sided && wo.z < 0.0 {
+            Vec3A::new(wo.x, wo.y, -wo.z)
+        } else {
+            wo
+        };
+        uc_rest < self.lobes()[chosen].0.delta_probability(wo)
+    }
+
+    /// The lobe `uc` chooses (in proportion to the weights) and what is
+    /// left of `uc` to use inside it.
+    fn choose(&self, uc: f32) -> Option<(usize, f32)> {
+        let total = self.total_weight();
+        if total <= 0.0 {
+            return None;
+        }
+        let mut acc = 0.0;
+        for (i, (_, w)) in self.lobes().iter().enumerate() {
+            let p = w / total;
+            if uc < acc + p || i == self.count - 1 {
+                return Some((i, ((uc - acc) / p).clamp(0.0, 1.0 - f32::EPSILON)));
+            }
+            acc += p;
+        }
+        None
+    }
+
     /// Probability that [`sample`](Self::sample) returns a delta direction
     /// from `wo` (the photon tracer stores a photon when it does not, and
     /// divides its power by the complement).
@@ -326,24 +369,10 @@ impl Bsdf {
     /// light (below the surface, total absorption).
     pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2) -> Option<BsdfSample> {
         let total = self.total_weight();
-        if total <= 0.0 {
-            return None;
-        }
         let flip = self.two_sided && wo.z < 0.0;
         let wo_local = if flip { Vec3A::new(wo.x, wo.y, -wo.z) } else { wo };
         // Choose a lobe and reuse what is left of `uc` inside it.
-        let mut acc = 0.0;
-        let mut chosen = self.count - 1;
-        let mut uc_rest = uc;
-        for (i, (_, w)) in self.lobes().iter().enumerate() {
-            let p = w / total;
-            if uc < acc + p || i == self.count - 1 {
-                chosen = i;
-                uc_rest = ((uc - acc) / p).clamp(0.0, 1.0 - f32::EPSILON);
-                break;
-            }
-            acc += p;
-        }
+        let (chosen, uc_rest) = self.choose(uc)?;
         let (lobe, w) = self.lobes()[chosen];
         let mut s = lobe.sample(wo_local, uc_rest, u, self.transport)?;
         if s.delta {

@@ -36,14 +36,13 @@ pub fn settings_warnings(scene: &Scene) -> Vec<String> {
         if s.ambient.max_element() > 0.0 {
             out.push("`[render] ambient` is ignored: the path integrator computes indirect light".into());
         }
-        if s.medium.is_some() {
-            out.push("`[medium]` (exponential fog) is ignored: it is the Whitted integrator's model".into());
+        if s.medium.as_ref().is_some_and(|m| m.volume.is_none()) {
+            out.push(
+                "`[medium]` has no `absorption` and `scattering`: the path integrator renders no medium \
+                 (the exponential fog is the Whitted integrator's model)"
+                    .into(),
+            );
         }
-    }
-    if s.medium.as_ref().is_some_and(|m| m.volume.is_some()) {
-        out.push(
-            "`[medium]` absorption, scattering and g are read but not rendered yet: no integrator uses them".into(),
-        );
     }
     out
 }
@@ -206,17 +205,19 @@ mod tests {
     }
 
     #[test]
-    fn medium_coefficients_that_nothing_renders_are_named() {
+    fn a_medium_without_coefficients_is_named_in_path_mode() {
         let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/underwater.toml"));
         let text = std::fs::read_to_string(path).unwrap();
-        let plain = crate::scene::load::parse_scene(&text, path).unwrap();
-        assert!(settings_warnings(&plain).iter().all(|w| !w.contains("absorption")));
-        let text = text.replace(
-            "[medium]",
-            "[medium]\nabsorption = [0.4, 0.05, 0.02]\nscattering = [0.1, 0.1, 0.1]",
-        );
         let with_volume = crate::scene::load::parse_scene(&text, path).unwrap();
-        let w = settings_warnings(&with_volume);
-        assert!(w.iter().any(|w| w.contains("not rendered yet")), "{w:?}");
+        assert!(with_volume.settings.medium.as_ref().unwrap().volume.is_some());
+        let mut traced = with_volume.clone();
+        traced.settings.integrator = IntegratorKind::Path;
+        assert!(settings_warnings(&traced).iter().all(|w| !w.contains("[medium]")));
+        let mut fog_only = traced.clone();
+        fog_only.settings.medium.as_mut().unwrap().volume = None;
+        let w = settings_warnings(&fog_only);
+        assert!(w.iter().any(|w| w.contains("renders no medium")), "{w:?}");
+        // The Whitted integrator renders the fog of the same table.
+        assert!(settings_warnings(&with_volume).iter().all(|w| !w.contains("[medium]")));
     }
 }

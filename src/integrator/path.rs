@@ -14,9 +14,32 @@
 //! the ceiling above it, as in other physically based renderers). Spawned
 //! rays start at `offset_ray_origin`; shadow rays stop `SHADOW_EPSILON`
 //! short of the light.
+//!
+//! **The water's medium** (`[medium]` with `absorption` and `scattering`):
+//! inside the water (tracked across refractions by [`MediumTracker`]) each
+//! segment takes a free flight (spectral MIS over the channels); a scattering
+//! vertex samples a light through the Henyey–Greenstein phase function and
+//! continues in a phase-sampled direction; shadow rays carry the water's
+//! transmittance.
+//!
+//! **Photon-mapped caustics** (`[photons] caustics = "map"`, the photons
+//! traced with the same BSDFs by `photon::PhotonRules::Physical`): every
+//! vertex with a non-delta lobe adds the surface map's BSDF-weighted
+//! estimate, and every scattering vertex in the water the volume map's
+//! phase-weighted one (the camera path's first such vertex gathers `k`
+//! photons, later ones [`INDIRECT_GATHER_DIVISOR`] times fewer: their
+//! blur is hidden by the bounce). The maps hold exactly the light that
+//! arrived through one or more delta bounces (L S+ D, L S+ V), so after a
+//! vertex samples a non-delta direction, light the path then reaches
+//! through delta bounces only (at least one, at most the photons' depth)
+//! is not counted again: each light path is counted once, by the map at
+//! the vertex next to its delta chain, or as a path. Next-event estimation
+//! and light reached with no delta bounce stay path traced.
 
 use super::lights::LightSampler;
-use super::plan::{RenderPlan, ROULETTE_DEPTH};
+use super::medium::{Flight, MediumTracker, WaterVolume};
+use super::photon::{GatherParams, Kernel, PhotonMap, PHOTON_PATH_DEPTH};
+use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
@@ -37,22 +60,93 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// How much larger than the surface gather's radius the volume gather's is:
+/// photons that scatter fill a volume, so they lie much farther apart.
+pub const VOLUME_RADIUS_SCALE: f32 = 4.0;
+
+/// How many times fewer photons vertices after the camera path's first
+/// non-specular one gather.
+pub const INDIRECT_GATHER_DIVISOR: usize = 4;
+
+/// The caustic maps and how to gather them: `[first vertex, later ones]`.
+struct Caustics<'a> {
+    map: &'a PhotonMap,
+    surface: [GatherParams; 2],
+    volume: [GatherParams; 2],
+}
+
 /// The path tracer over one scene and accelerator.
 pub struct PathTracer<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
     lights: LightSampler,
     max_depth: u32,
+    gather: Option<GatherParams>,
+    caustics: Option<Caustics<'a>>,
+    /// Delta bounces after a map vertex within which reached light is a
+    /// caustic the map holds (the photons' own depth).
+    caustic_depth: u32,
+    water: Option<WaterVolume<'a>>,
 }
 
 impl<'a> PathTracer<'a> {
     /// Prepares the integrator.
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel, plan: &RenderPlan) -> Self {
+        let gather = match plan.photons {
+            PhotonPlan::Run {
+                k, max_radius, cone_k, ..
+            } => Some(GatherParams {
+                k: std::num::NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
+                max_radius,
+                cone_k,
+            }),
+            _ => None,
+        };
         Self {
             scene,
             accel,
             lights: LightSampler::new(scene),
             max_depth: plan.max_depth,
+            gather,
+            caustics: None,
+            caustic_depth: scene.settings.max_depth.unwrap_or(PHOTON_PATH_DEPTH),
+            water: match plan.medium {
+                MediumPlan::Run { .. } => WaterVolume::of(scene),
+                _ => None,
+            },
+        }
+    }
+
+    /// Adds the caustics of `map` (traced with `PhotonRules::Physical`), when
+    /// the plan runs the photon pass.
+    pub fn with_photons(mut self, map: &'a PhotonMap) -> Self {
+        if let Some(first) = self.gather {
+            let later = GatherParams {
+                k: std::num::NonZero::new((first.k.get() / INDIRECT_GATHER_DIVISOR).max(1)).expect("≥ 1"),
+                ..first
+            };
+            let volume = |g: GatherParams| GatherParams {
+                max_radius: g.max_radius * VOLUME_RADIUS_SCALE,
+                ..g
+            };
+            self.caustics = Some(Caustics {
+                map,
+                surface: [first, later],
+                volume: [volume(first), volume(later)],
+            });
+        }
+        self
+    }
+
+    /// Transmittance of the water along a shadow ray leaving `origin` in
+    /// the water, over `length` (any surface it crosses occludes it).
+    fn shadow_transmittance(&self, in_water: bool, origin: Vec3A, dir: Vec3A, length: f32) -> Vec3A {
+        match &self.water {
+            Some(w) if in_water => {
+                let exit = w.exit_distance(&Ray::new(origin, dir));
+                w.coefficients.transmittance(length.min(exit))
+            }
+            _ => Vec3A::ONE,
         }
     }
 
@@ -68,11 +162,88 @@ impl<'a> PathTracer<'a> {
         let mut bsdf_pdf = 0.0f32;
         let mut eta_scale = 1.0f32;
         let mut depth = 0u32;
+        let mut medium = MediumTracker::new(self.water.as_ref().is_some_and(|w| w.contains(ray.origin)));
+        // Every bounce so far was a delta lobe: a vertex gathers the most photons.
+        let mut delta_chain = true;
+        // Delta bounces since a map vertex sampled a non-delta direction.
+        let mut since_map: Option<u32> = None;
         loop {
             let hit = self.accel.intersect(&ray, f32::INFINITY);
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
-            if let Some(e) = self.lights.nearest_hit(&ray, t_hit) {
-                if e.radiance != Vec3A::ZERO {
+            let emitter = self.lights.nearest_hit(&ray, t_hit);
+
+            if let Some(water) = self.water.as_ref().filter(|_| medium.inside()) {
+                let len = ray.dir.length();
+                let dir = ray.dir / len;
+                let t_end = emitter.map_or(t_hit, |e| e.t);
+                let exit = water.exit_distance(&Ray::new(ray.origin, dir));
+                let flight = water
+                    .coefficients
+                    .sample_flight((t_end * len).min(exit), rng.f32(), rng.f32());
+                match flight {
+                    Flight::Surface { weight } => beta *= weight,
+                    Flight::Scatter { t, weight } => {
+                        if depth >= self.max_depth {
+                            break;
+                        }
+                        let x = ray.origin + dir * t;
+                        let wo = -dir;
+                        let coefficients = &water.coefficients;
+                        if let Some(c) = &self.caustics {
+                            if let Some(volume) = &c.map.volume {
+                                // The stored powers hold σs: the estimate is
+                                // σs·Ls, so divide the flight's σs back out.
+                                let tr_over_pdf = Vec3A::select(
+                                    coefficients.sigma_s.cmpgt(Vec3A::ZERO),
+                                    weight / coefficients.sigma_s,
+                                    Vec3A::ZERO,
+                                );
+                                let g = &c.volume[usize::from(!delta_chain)];
+                                let js = volume.weighted_estimate(x, g, Kernel::Ball, |r| {
+                                    Vec3A::splat(coefficients.phase(wo, r.incoming())) * r.power()
+                                });
+                                l += beta * tr_over_pdf * js;
+                            }
+                        }
+                        beta *= weight;
+                        // Next-event estimation through the phase function.
+                        if let Some(ls) = self.lights.sample(x, rng.f32(), rng.vec2()) {
+                            let f = coefficients.phase(wo, ls.wi);
+                            let (shadow, t_max, length) = match ls.target {
+                                Some(q) => (Ray::new(x, q - x), 1.0 - SHADOW_EPSILON, (q - x).length()),
+                                None => (Ray::new(x, ls.wi), f32::INFINITY, f32::INFINITY),
+                            };
+                            counts.shadow += 1;
+                            if f > 0.0
+                                && self.lights.nearest_hit(&shadow, t_max).is_none()
+                                && !self.accel.occluded(&shadow, t_max)
+                            {
+                                let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
+                                let tr = self.shadow_transmittance(true, x, ls.wi, length);
+                                l += beta * tr * ls.li * (f * w / ls.pdf);
+                            }
+                        }
+                        let (wi, pdf) = coefficients.sample_phase(wo, rng.vec2());
+                        since_map = self.caustics.is_some().then_some(0);
+                        delta_chain = false;
+                        specular = false;
+                        bsdf_pdf = pdf;
+                        depth += 1;
+                        if !self.roulette(&mut beta, eta_scale, depth, rng) {
+                            break;
+                        }
+                        ray = Ray::new(x, wi);
+                        counts.secondary += 1;
+                        continue;
+                    }
+                }
+            }
+
+            if let Some(e) = emitter {
+                // Light reached through delta bounces after a map vertex is
+                // the map's caustic.
+                let in_map = since_map.is_some_and(|n| n >= 1 && n <= self.caustic_depth);
+                if e.radiance != Vec3A::ZERO && !in_map {
                     let w = if specular {
                         1.0
                     } else {
@@ -83,6 +254,7 @@ impl<'a> PathTracer<'a> {
                 break;
             }
             let Some(hit) = hit else {
+                // Environments emit no photons: never in the map.
                 let (le, light_pdf) = self.lights.environment();
                 if le != Vec3A::ZERO {
                     let w = if specular {
@@ -115,16 +287,35 @@ impl<'a> PathTracer<'a> {
                 geometric == shading
             };
 
-            // Next-event estimation.
             if bsdf.has_smooth_lobe() {
+                // The caustic map's estimate, `Σ f(ωo, ωp) Φp / (π r²)`.
+                if let Some(c) = &self.caustics {
+                    let g = &c.surface[usize::from(!delta_chain)];
+                    l += beta
+                        * c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
+                            let wi_world = r.incoming();
+                            let wi = frame.to_local(wi_world);
+                            if consistent(wi_world, wi) {
+                                bsdf.eval(wo, wi) * r.power()
+                            } else {
+                                Vec3A::ZERO
+                            }
+                        });
+                }
+
+                // Next-event estimation.
                 if let Some(ls) = self.lights.sample(si.p, rng.f32(), rng.vec2()) {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi) * wi.z.abs();
                     if f.max_element() > 0.0 && consistent(ls.wi, wi) {
                         let origin = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
-                        let (shadow, t_max) = match ls.target {
-                            Some(q) => (Ray::new(origin, q - origin), 1.0 - SHADOW_EPSILON),
-                            None => (Ray::new(origin, ls.wi), f32::INFINITY),
+                        let (shadow, t_max, length) = match ls.target {
+                            Some(q) => (
+                                Ray::new(origin, q - origin),
+                                1.0 - SHADOW_EPSILON,
+                                (q - origin).length(),
+                            ),
+                            None => (Ray::new(origin, ls.wi), f32::INFINITY, f32::INFINITY),
                         };
                         counts.shadow += 1;
                         let light_between = self.lights.nearest_hit(&shadow, t_max).is_some();
@@ -134,7 +325,8 @@ impl<'a> PathTracer<'a> {
                             } else {
                                 power_heuristic(ls.pdf, bsdf.pdf(wo, wi))
                             };
-                            l += beta * f * ls.li * (w / ls.pdf);
+                            let tr = self.shadow_transmittance(medium.inside(), origin, ls.wi, length);
+                            l += beta * f * tr * ls.li * (w / ls.pdf);
                         }
                     }
                 }
@@ -151,25 +343,46 @@ impl<'a> PathTracer<'a> {
             beta *= s.weight();
             specular = s.delta;
             bsdf_pdf = s.pdf;
+            if s.delta {
+                if let Some(n) = since_map.as_mut() {
+                    *n += 1;
+                }
+            } else {
+                since_map = self.caustics.is_some().then_some(0);
+                delta_chain = false;
+            }
             if s.transmission {
                 eta_scale *= s.eta * s.eta;
+                if let Some(water) = &self.water {
+                    let entering = ray.dir.dot(si.ng) < 0.0;
+                    medium.transmit(hit.instance, water.medium.boundary, entering);
+                }
             }
             if !beta.is_finite() || beta.max_element() <= 0.0 {
                 break;
             }
             depth += 1;
-            if depth > ROULETTE_DEPTH {
-                let survive = (beta * eta_scale).max_element().min(1.0);
-                if rng.f32() >= survive {
-                    break;
-                }
-                beta /= survive;
+            if !self.roulette(&mut beta, eta_scale, depth, rng) {
+                break;
             }
             let origin = offset_ray_origin(si.p, si.p_error, si.ng, wi_world);
             ray = Ray::new(origin, wi_world);
             counts.secondary += 1;
         }
         l
+    }
+
+    /// Russian roulette past [`ROULETTE_DEPTH`] bounces: false when the
+    /// path ends, else `beta` is divided by the survival probability.
+    fn roulette(&self, beta: &mut Vec3A, eta_scale: f32, depth: u32, rng: &mut Sampler) -> bool {
+        if depth > ROULETTE_DEPTH {
+            let survive = (*beta * eta_scale).max_element().min(1.0);
+            if rng.f32() >= survive {
+                return false;
+            }
+            *beta /= survive;
+        }
+        true
     }
 }
 

@@ -8,8 +8,10 @@
 //! Each pass has its own "ran / skipped because ..." line in the `Display`
 //! output.
 
+use super::photon::PhotonRules;
+use crate::bsdf::{Bsdf, Transport};
 use crate::math::SamplerKind;
-use crate::scene::{AdaptiveGoal, IntegratorKind, Light, SampleSharing, Scene};
+use crate::scene::{AdaptiveGoal, CausticsMode, FresnelModel, GatherMode, IntegratorKind, Light, SampleSharing, Scene};
 use std::fmt;
 
 /// Bounces before the path integrator's Russian roulette may end a path.
@@ -118,6 +120,26 @@ pub enum PhotonPlan {
     PathTraced,
 }
 
+/// The path integrator's homogeneous medium (`[medium]` with `absorption`
+/// and `scattering`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MediumPlan {
+    /// Free-flight sampling, transmittance on shadow rays, Henyey–Greenstein
+    /// scattering.
+    Run {
+        /// Absorption coefficient.
+        absorption: crate::math::Vec3A,
+        /// Scattering coefficient.
+        scattering: crate::math::Vec3A,
+        /// Henyey–Greenstein asymmetry.
+        g: f32,
+    },
+    /// No `[medium]`, or the Whitted integrator (its exponential fog).
+    None,
+    /// A `[medium]` with the fog's keys only.
+    NoCoefficients,
+}
+
 /// Exponential fog.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FogPlan {
@@ -162,6 +184,11 @@ pub struct RenderPlan {
     pub sharing: Sharing,
     /// Photon pass.
     pub photons: PhotonPlan,
+    /// How the photons scatter: the Whitted integrator's rules, or the path
+    /// integrator's BSDFs and medium (`[photons] caustics = "map"`).
+    pub photon_rules: PhotonRules,
+    /// The path integrator's participating medium in the water.
+    pub medium: MediumPlan,
     /// Fog.
     pub fog: FogPlan,
     /// Keep a coarse copy of every photon's position for the debug
@@ -215,12 +242,16 @@ impl RenderPlan {
             })
             .collect();
         let mut specular_objects = 0;
+        let mut delta_objects = 0;
         let mut secondary_objects = 0;
         let mut dielectric_objects = 0;
         for o in &scene.objects {
             let m = &scene.materials[o.material as usize];
             if m.is_specular() {
                 specular_objects += 1;
+            }
+            if Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance).has_delta_lobe() {
+                delta_objects += 1;
             }
             if m.spawns_secondary() {
                 secondary_objects += 1;
@@ -246,9 +277,11 @@ impl RenderPlan {
             }
         };
         let ps = &s.photons;
-        let photons = if path {
+        let physical = path && ps.caustics == CausticsMode::Map;
+        let casters = if physical { delta_objects } else { specular_objects };
+        let photons = if path && !physical {
             PhotonPlan::PathTraced
-        } else if specular_objects == 0 {
+        } else if casters == 0 {
             PhotonPlan::NoSpecularCaster
         } else if !scene.lights.iter().any(Light::emits_photons) {
             PhotonPlan::NoLights
@@ -259,12 +292,22 @@ impl RenderPlan {
         } else {
             PhotonPlan::Run {
                 count: ps.count,
-                casters: specular_objects,
+                casters,
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
-                gather: ps.gather,
+                // The BSDF-weighted estimate has nothing to precompute.
+                gather: if physical { GatherMode::Direct } else { ps.gather },
             }
+        };
+        let medium = match s.medium.as_ref().map(|m| m.volume) {
+            Some(Some(v)) if path => MediumPlan::Run {
+                absorption: v.absorption,
+                scattering: v.scattering,
+                g: v.g,
+            },
+            Some(None) if path => MediumPlan::NoCoefficients,
+            _ => MediumPlan::None,
         };
         let fog = match &s.medium {
             Some(_) if path => FogPlan::PathTraced,
@@ -289,6 +332,12 @@ impl RenderPlan {
             secondary,
             sharing,
             photons,
+            photon_rules: if physical {
+                PhotonRules::Physical
+            } else {
+                PhotonRules::Whitted
+            },
+            medium,
             fog,
             keep_photon_positions: false,
             aovs: s.denoise,
@@ -477,6 +526,27 @@ impl RenderPlan {
                 k,
                 max_radius,
                 cone_k,
+                ..
+            } if self.photon_rules == PhotonRules::Physical => Stage::ran(
+                "photon pass",
+                format!(
+                    "{count} photons through the path integrator's BSDFs, emission restricted to \
+                     {casters} caster(s) with a delta lobe; caustics (L S+ D{}) from the map at the \
+                     first non-specular vertex, gather {k} nearest within {max_radius:.4}, cone \
+                     filter k = {cone_k}, BSDF-weighted",
+                    if matches!(self.medium, MediumPlan::Run { .. }) {
+                        ", and L S+ V in the water"
+                    } else {
+                        ""
+                    }
+                ),
+            ),
+            PhotonPlan::Run {
+                count,
+                casters,
+                k,
+                max_radius,
+                cone_k,
                 gather,
             } => Stage::ran(
                 "photon pass",
@@ -489,8 +559,29 @@ impl RenderPlan {
             PhotonPlan::NoLights => Stage::skipped("photon pass", "no lights"),
             PhotonPlan::DepthZero => Stage::skipped("photon pass", "max depth is 0"),
             PhotonPlan::CountZero => Stage::skipped("photon pass", "photon count is 0"),
-            PhotonPlan::PathTraced => Stage::skipped("photon pass", "the path integrator traces caustics as paths"),
+            PhotonPlan::PathTraced => Stage::skipped(
+                "photon pass",
+                "the path integrator traces caustics as paths ([photons] caustics = \"path\")",
+            ),
         });
+        match self.medium {
+            MediumPlan::Run {
+                absorption,
+                scattering,
+                g,
+            } => stages.push(Stage::ran(
+                "medium",
+                format!(
+                    "homogeneous in the water: absorption {absorption:.3}, scattering {scattering:.3}, \
+                     Henyey–Greenstein g = {g}; free flights, transmittance on shadow rays"
+                ),
+            )),
+            MediumPlan::NoCoefficients => stages.push(Stage::skipped(
+                "medium",
+                "[medium] gives no `absorption` and `scattering` (the fog is the Whitted integrator's)",
+            )),
+            MediumPlan::None => {}
+        }
         stages.push(match self.fog {
             FogPlan::Run { density } => {
                 Stage::ran("fog", format!("density {density} per unit length inside the water"))

@@ -214,6 +214,7 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
         count,
         precompute.as_ref(),
         plan.keep_photon_positions,
+        plan.photon_rules,
     ))
 }
 
@@ -389,7 +390,13 @@ pub fn render_progressive(
             }
             Tracer::Whitted(w)
         }
-        IntegratorKind::Path => Tracer::Path(PathTracer::new(scene, accel, plan)),
+        IntegratorKind::Path => {
+            let mut p = PathTracer::new(scene, accel, plan);
+            if let Some(map) = photons {
+                p = p.with_photons(map);
+            }
+            Tracer::Path(p)
+        }
     };
     let aovs = AovTracer::new(scene, accel);
     let stop = Stop {

@@ -64,6 +64,8 @@ pub struct Overrides {
     pub adaptive_goal: Option<crate::scene::AdaptiveGoal>,
     /// Denoise the final image (Open Image Denoise).
     pub denoise: Option<bool>,
+    /// How the path integrator finds caustics.
+    pub caustics: Option<crate::scene::CausticsMode>,
 }
 
 impl Overrides {
@@ -111,6 +113,9 @@ impl Overrides {
         }
         if let Some(d) = self.denoise {
             s.denoise = d;
+        }
+        if let Some(c) = self.caustics {
+            s.photons.caustics = c;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
             .map_err(|e| JobError::Invalid(format!("{}: with the command-line overrides: {e}", source.display())))

@@ -6,7 +6,7 @@ use super::fingerprint::photon_fingerprint;
 use super::{JobError, Overrides};
 use crate::accel::{self, AccelKind, AccelOptions};
 use crate::film;
-use crate::integrator::photon::{read_photons, trace_photons, write_photons, TracedPhotons};
+use crate::integrator::photon::{read_photons, trace_photons, write_photons, PhotonRules, TracedPhotons};
 use crate::integrator::{planned_photons, RenderPlan};
 use crate::scene::{self, Scene};
 use std::path::{Path, PathBuf};
@@ -56,7 +56,15 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
         triangle_test: scene.settings.triangle_test,
         ..request.accel_options.clone()
     };
-    let Some(count) = planned_photons(&RenderPlan::new(&scene)) else {
+    let plan = RenderPlan::new(&scene);
+    if plan.photon_rules == PhotonRules::Physical {
+        return Err(JobError::Invalid(format!(
+            "{}: photon files hold the Whitted integrator's caustic map; the path integrator's maps \
+             ([photons] caustics = \"map\") are traced by the render itself",
+            request.scene.display()
+        )));
+    }
+    let Some(count) = planned_photons(&plan) else {
         return Err(JobError::Invalid(format!(
             "{}: this scene's render runs no photon pass (no mirror or glass object, --photons 0, \
              or path tracing): there are no photons to trace",
@@ -89,7 +97,15 @@ pub fn load_for(
     accel: AccelKind,
     options: &AccelOptions,
 ) -> Result<TracedPhotons, JobError> {
-    let Some(planned) = planned_photons(&RenderPlan::new(scene)) else {
+    let plan = RenderPlan::new(scene);
+    if plan.photon_rules == PhotonRules::Physical {
+        return Err(JobError::Invalid(format!(
+            "--photon-map {}: photon files hold the Whitted integrator's caustic map; the path \
+             integrator's maps ([photons] caustics = \"map\") are traced by the render itself",
+            path.display()
+        )));
+    }
+    let Some(planned) = planned_photons(&plan) else {
         return Err(JobError::Invalid(format!(
             "--photon-map {}: this render runs no photon pass (no mirror or glass object, --photons 0, \
              or path tracing)",

@@ -59,6 +59,18 @@ pub struct PhotonsDesc {
     pub cone_k: Option<Spanned<f64>>,
     /// `"precomputed"` or `"direct"`.
     pub gather: Option<GatherName>,
+    /// `"path"` or `"map"`.
+    pub caustics: Option<CausticsName>,
+}
+
+/// How the path integrator finds caustics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CausticsName {
+    /// `"path"`.
+    Path,
+    /// `"map"`.
+    Map,
 }
 
 /// Photon gather modes.

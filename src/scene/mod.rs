@@ -154,6 +154,23 @@ pub struct PhotonSettings {
     pub cone_k: f32,
     /// How shading points evaluate the estimate.
     pub gather: GatherMode,
+    /// How the path integrator finds caustics (the Whitted integrator
+    /// always uses the map).
+    pub caustics: CausticsMode,
+}
+
+/// How the path integrator finds caustics (`[photons] caustics`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CausticsMode {
+    /// As paths: unbiased, slow to converge for small lights seen through
+    /// glass or water.
+    #[default]
+    Path,
+    /// From a photon map of light → specular → diffuse (L S+ D) paths,
+    /// added at the camera path's first non-specular vertex, plus a
+    /// volumetric map of light scattered in the water after a specular
+    /// bounce (L S+ V); path tracing then leaves those paths out.
+    Map,
 }
 
 /// How the caustic estimate is evaluated at shading points (`[photons] gather`).
@@ -176,6 +193,7 @@ impl Default for PhotonSettings {
             max_radius: None,
             cone_k: 1.1,
             gather: GatherMode::Precomputed,
+            caustics: CausticsMode::Path,
         }
     }
 }

@@ -176,6 +176,11 @@ pub struct RenderArgs {
     /// (image: samples in proportion to each pixel's noise).
     #[arg(long, value_enum)]
     pub adaptive_goal: Option<AdaptiveGoalArg>,
+    /// How the path integrator finds caustics: as paths (path, unbiased) or
+    /// from photon maps of light through mirrors, glass and water (map).
+    /// Also `[photons] caustics`.
+    #[arg(long, value_enum)]
+    pub caustics: Option<CausticsArg>,
     /// Most samples per pixel (the same as --spp).
     #[arg(long, conflicts_with = "spp")]
     pub max_spp: Option<u32>,
@@ -372,6 +377,24 @@ pub struct CrosscheckArgs {
     pub accel: AccelArgs,
 }
 
+/// How the path integrator finds caustics.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum CausticsArg {
+    /// As paths.
+    Path,
+    /// From photon maps.
+    Map,
+}
+
+impl From<CausticsArg> for caustic::scene::CausticsMode {
+    fn from(c: CausticsArg) -> Self {
+        match c {
+            CausticsArg::Path => Self::Path,
+            CausticsArg::Map => Self::Map,
+        }
+    }
+}
+
 /// What adaptive sampling's threshold bounds.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum AdaptiveGoalArg {
@@ -447,6 +470,9 @@ pub struct ConvergeArgs {
     /// What an adaptive render's threshold bounds (see `render --adaptive-goal`).
     #[arg(long, value_enum)]
     pub adaptive_goal: Option<AdaptiveGoalArg>,
+    /// How the path integrator finds caustics (as in `render`).
+    #[arg(long, value_enum)]
+    pub caustics: Option<CausticsArg>,
     /// For every curve, render on (spp doubled, threshold halved) until
     /// relMSE is at most this, and report the time it took (interpolated).
     #[arg(long)]

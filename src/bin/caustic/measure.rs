@@ -142,6 +142,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         noise_threshold: None,
         min_spp: None,
         adaptive_goal: args.adaptive_goal.map(Into::into),
+        caustics: args.caustics.map(Into::into),
         ..Overrides::default()
     }
     .apply(&mut scene, &args.scene)

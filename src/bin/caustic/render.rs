@@ -45,6 +45,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             min_spp: args.min_spp,
             adaptive_goal: args.adaptive_goal.map(Into::into),
             denoise: args.denoise.then_some(true),
+            caustics: args.caustics.map(Into::into),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),

@@ -44,11 +44,25 @@
 //! reflects. At a diffuse surface reached after at least one specular
 //! bounce the photon is stored and stops. At most `max_depth` specular
 //! bounces. Inside a medium the power is attenuated by `exp(−σ d)`.
+//!
+//! **Physically based rules** ([`PhotonRules::Physical`], for the path
+//! integrator's caustic map): the casters are the objects whose BSDF has a
+//! delta lobe, and each hit samples the path integrator's own BSDF
+//! (exact Fresnel, importance transport): a delta lobe continues the
+//! photon with the sample's weight; otherwise the photon is stored (after
+//! at least one delta bounce) with its power divided by the probability of
+//! not picking a delta lobe, and stops. "Specular" means exactly "a delta
+//! lobe" on both sides, so the camera paths the map replaces are known
+//! (see `integrator::path`). In the water's medium the photon takes a free
+//! flight ([`crate::integrator::medium::Homogeneous::sample_flight`]); one that scatters after a delta
+//! bounce is stored in the volume map (light shafts: L S+ V) and stops.
 
 use super::map::Photon;
 use crate::accel::{Accel, Hit};
 use crate::bsdf::{reflect, specular, DielectricInterface};
+use crate::bsdf::{Bsdf, Transport};
 use crate::integrator::fog;
+use crate::integrator::medium::{Flight, MediumTracker, WaterVolume};
 use crate::math::rng::{Domain, Rng};
 use crate::math::sampling::{cosine_hemisphere, morton_stratified, uniform_cone, uniform_sphere};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
@@ -96,6 +110,30 @@ pub fn casters_where(scene: &Scene, keep: impl Fn(&crate::scene::Material) -> bo
         .collect()
 }
 
+/// The objects whose BSDF has a delta lobe: the casters of the
+/// physically based caustic map.
+pub fn delta_casters(scene: &Scene) -> Vec<Caster> {
+    casters_where(scene, |m| {
+        Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance).has_delta_lobe()
+    })
+}
+
+/// Delta bounces the path integrator's caustic photons follow, and the most
+/// a camera path may take after its map vertex for the light it then
+/// reaches to count as a caustic (the same bound on both sides), when
+/// `max_depth` is not set.
+pub const PHOTON_PATH_DEPTH: u32 = 16;
+
+/// How photons scatter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhotonRules {
+    /// The Whitted integrator's rules (Schlick Fresnel, mirror
+    /// reflectivity, stored at diffuse surfaces, fog attenuation).
+    Whitted,
+    /// The path integrator's BSDFs and the water's participating medium.
+    Physical,
+}
+
 /// One light as an emitter: its casters (those not entirely behind an
 /// area light) and its selection probability.
 #[derive(Clone, Debug)]
@@ -116,6 +154,9 @@ pub struct PhotonTracer<'a> {
     count: u64,
     seed: u64,
     max_depth: u32,
+    rules: PhotonRules,
+    /// The water's medium (physically based rules only).
+    water: Option<WaterVolume<'a>>,
 }
 
 /// A photon in flight: its next ray, its power and its own random stream.
@@ -127,6 +168,8 @@ pub struct PhotonPath {
     pub(super) ray: Ray,
     pub(super) power: Vec3A,
     pub(super) bounces: u32,
+    /// In the water or not (physically based rules).
+    pub(super) medium: MediumTracker,
 }
 
 impl PhotonPath {
@@ -143,6 +186,9 @@ pub enum Step {
     Continue,
     /// Reached a diffuse surface after a specular bounce: stored.
     Stored(Photon),
+    /// Scattered in the medium after a specular bounce: stored in the
+    /// volume map (`normal` is unused).
+    Scattered(Photon),
     /// Escaped, absorbed, or ended on a surface before any specular bounce.
     Done,
 }
@@ -155,6 +201,20 @@ impl<'a> PhotonTracer<'a> {
     /// Prepares emission of `count` photons in total.
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel, count: u64) -> Self {
         Self::with_casters(scene, accel, count, specular_casters(scene))
+    }
+
+    /// Prepares emission of `count` photons under `rules`.
+    pub fn with_rules(scene: &'a Scene, accel: &'a dyn Accel, count: u64, rules: PhotonRules) -> Self {
+        match rules {
+            PhotonRules::Whitted => Self::new(scene, accel, count),
+            PhotonRules::Physical => {
+                let mut t = Self::with_casters(scene, accel, count, delta_casters(scene));
+                t.rules = rules;
+                t.water = WaterVolume::of(scene);
+                t.max_depth = scene.settings.max_depth.unwrap_or(PHOTON_PATH_DEPTH);
+                t
+            }
+        }
     }
 
     /// Like [`new`](Self::new), with emission restricted to `casters`.
@@ -198,12 +258,17 @@ impl<'a> PhotonTracer<'a> {
             count,
             seed: scene.settings.seed,
             max_depth: scene.settings.whitted_depth(),
+            rules: PhotonRules::Whitted,
+            water: None,
         }
     }
 
     /// Number of casters emission is restricted to (over all lights, distinct).
     pub fn caster_count(&self) -> usize {
-        specular_casters(self.scene).len()
+        match self.rules {
+            PhotonRules::Whitted => specular_casters(self.scene).len(),
+            PhotonRules::Physical => delta_casters(self.scene).len(),
+        }
     }
 
     /// True when some light can light a caster.
@@ -250,12 +315,14 @@ impl<'a> PhotonTracer<'a> {
             // Environments emit no photons: they have no casters (`new`).
             Light::Environment { .. } => return None,
         };
+        let in_water = self.water.as_ref().is_some_and(|w| w.contains(origin));
         Some(PhotonPath {
             index,
             rng,
             ray: Ray::new(origin, dir),
             power,
             bounces: 0,
+            medium: MediumTracker::new(in_water),
         })
     }
 
@@ -268,12 +335,13 @@ impl<'a> PhotonTracer<'a> {
     /// them one by one. The buffers live for the whole range: nothing is
     /// allocated per wavefront, and stored photons go straight to `store`
     /// (the caller's packed arrays) instead of a growing list.
-    pub fn trace_range(&self, first: u64, last: u64, mut store: impl FnMut(u64, Photon)) -> u64 {
+    /// `store` gets `true` with a photon of the volume map.
+    pub fn trace_range(&self, first: u64, last: u64, mut store: impl FnMut(u64, Photon, bool)) -> u64 {
         let mut rays = 0u64;
         let mut batch: Vec<Ray> = Vec::with_capacity(WAVEFRONT);
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(WAVEFRONT);
         let mut paths: Vec<PhotonPath> = Vec::with_capacity(WAVEFRONT);
-        let mut wave: Vec<(u64, Photon)> = Vec::with_capacity(WAVEFRONT);
+        let mut wave: Vec<(u64, Photon, bool)> = Vec::with_capacity(WAVEFRONT);
         let mut start = first;
         while start < last {
             let end = (start + WAVEFRONT as u64).min(last);
@@ -294,16 +362,17 @@ impl<'a> PhotonTracer<'a> {
                             paths.swap(kept, i);
                             kept += 1;
                         }
-                        Step::Stored(photon) => wave.push((paths[i].index, photon)),
+                        Step::Stored(photon) => wave.push((paths[i].index, photon, false)),
+                        Step::Scattered(photon) => wave.push((paths[i].index, photon, true)),
                         Step::Done => {}
                     }
                 }
                 paths.truncate(kept);
             }
             // Photons store in the order their paths ended: back to index order.
-            wave.sort_unstable_by_key(|&(index, _)| index);
-            for &(index, photon) in &wave {
-                store(index, photon);
+            wave.sort_unstable_by_key(|&(index, _, _)| index);
+            for &(index, photon, volume) in &wave {
+                store(index, photon, volume);
             }
             start = end;
         }
@@ -325,6 +394,9 @@ impl<'a> PhotonTracer<'a> {
     /// Advances `path` past `hit`, the end of its current ray (`None`: it
     /// left the scene).
     pub fn step(&self, path: &mut PhotonPath, hit: Option<Hit>) -> Step {
+        if self.rules == PhotonRules::Physical {
+            return self.step_physical(path, hit);
+        }
         let Some(hit) = hit else {
             return Step::Done;
         };
@@ -410,6 +482,88 @@ impl<'a> PhotonTracer<'a> {
         }
         path.bounces += 1;
         let dir = dir.normalize();
+        path.ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, dir), dir);
+        Step::Continue
+    }
+}
+
+impl PhotonTracer<'_> {
+    /// [`step`](PhotonTracer::step) under [`PhotonRules::Physical`].
+    fn step_physical(&self, path: &mut PhotonPath, hit: Option<Hit>) -> Step {
+        let ray = path.ray; // unit direction (emission and `Continue` normalise)
+        if let Some(water) = self.water.as_ref().filter(|_| path.medium.inside()) {
+            let exit = water.exit_distance(&ray);
+            let d = hit.map_or(exit, |h| h.t.min(exit));
+            match water.coefficients.sample_flight(d, path.rng.f32(), path.rng.f32()) {
+                Flight::Scatter { t, weight } => {
+                    path.power *= weight;
+                    if path.bounces == 0 || !path.power.is_finite() || path.power.max_element() <= 0.0 {
+                        return Step::Done;
+                    }
+                    return Step::Scattered(Photon {
+                        position: ray.at(t),
+                        incoming: -ray.dir,
+                        normal: Vec3A::ZERO,
+                        power: path.power,
+                    });
+                }
+                Flight::Surface { weight } => path.power *= weight,
+            }
+            if hit.is_none_or(|h| h.t > exit) {
+                return Step::Done; // left the water's box where no surface bounds it
+            }
+        }
+        let Some(hit) = hit else {
+            return Step::Done;
+        };
+        let si = self.scene.surface_interaction(&ray, &hit);
+        let m = &self.scene.materials[si.material as usize];
+        let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance);
+        if bsdf.is_black() {
+            return Step::Done;
+        }
+        let frame = Frame::from_normal(si.ns);
+        let wo_world = -ray.dir;
+        let wo = frame.to_local(wo_world);
+        let uc = path.rng.f32();
+        let u = path.rng.vec2();
+        if !bsdf.picks_delta(wo, uc) {
+            if path.bounces == 0 || !bsdf.has_smooth_lobe() {
+                return Step::Done;
+            }
+            let p_smooth = 1.0 - bsdf.delta_probability(wo);
+            if p_smooth <= 0.0 {
+                return Step::Done;
+            }
+            return Step::Stored(Photon {
+                position: si.p,
+                incoming: wo_world,
+                normal: if si.ng.dot(wo_world) >= 0.0 { si.ng } else { -si.ng },
+                power: path.power / p_smooth,
+            });
+        }
+        if path.bounces >= self.max_depth {
+            return Step::Done;
+        }
+        let Some(s) = bsdf.sample(wo, uc, u) else {
+            return Step::Done;
+        };
+        let dir = frame.to_world(s.wi).normalize();
+        // The geometric side must agree with the shading one (no leaks).
+        if (dir.dot(si.ng) * wo_world.dot(si.ng) > 0.0) != (s.wi.z * wo.z > 0.0) {
+            return Step::Done;
+        }
+        path.power *= s.weight();
+        if !path.power.is_finite() || path.power.max_element() <= 0.0 {
+            return Step::Done;
+        }
+        if s.transmission {
+            if let Some(water) = &self.water {
+                let entering = ray.dir.dot(si.ng) < 0.0;
+                path.medium.transmit(hit.instance, water.medium.boundary, entering);
+            }
+        }
+        path.bounces += 1;
         path.ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, dir), dir);
         Step::Continue
     }

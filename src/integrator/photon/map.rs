@@ -235,6 +235,10 @@ pub struct PhotonMap {
     /// Irradiance precomputed at a subset of the photons (Christensen
     /// 1999), when [`PhotonMap::precompute_irradiance`] ran.
     pub(super) precomputed: Option<super::precomputed::PrecomputedIrradiance>,
+    /// The photons the path integrator's physically based pass stored where
+    /// they scattered in a participating medium (light shafts), when any
+    /// did: a map of its own, gathered in 3-D balls.
+    pub volume: Option<Box<PhotonMap>>,
 }
 
 impl std::fmt::Debug for PhotonMap {
@@ -294,6 +298,7 @@ impl PhotonMap {
             coarse,
             bounds,
             precomputed: None,
+            volume: None,
         }
     }
 
@@ -328,6 +333,7 @@ impl PhotonMap {
             + n * std::mem::size_of::<PhotonRecord>()
             + self.coarse.len() * std::mem::size_of::<[u16; 3]>()
             + self.precomputed.as_ref().map_or(0, |p| p.memory_bytes())
+            + self.volume.as_ref().map_or(0, |v| v.memory_bytes())
     }
 
     /// Total power of all stored photons (f64 accumulation).

@@ -20,9 +20,9 @@ pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
 
-pub use emit::{specular_casters, Caster, PhotonTracer};
+pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
-pub use gather::GatherParams;
+pub use gather::{GatherParams, Kernel};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
 pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 
@@ -42,6 +42,8 @@ const BATCH: u64 = 1 << 20;
 struct TracedChunk {
     positions: Vec<[f32; 3]>,
     records: Vec<PhotonRecord>,
+    volume_positions: Vec<[f32; 3]>,
+    volume_records: Vec<PhotonRecord>,
     sites: Vec<IrradianceSite>,
     rays: u64,
 }
@@ -67,6 +69,8 @@ pub struct PhotonStats {
     pub emitted: u64,
     /// Photons stored in the caustic map.
     pub stored: u64,
+    /// Photons stored in the volume map (path integrator, in a medium).
+    pub volume_stored: u64,
     /// Rays cast while tracing photons.
     pub rays: u64,
     /// Wall time of emission and tracing.
@@ -85,18 +89,23 @@ impl fmt::Display for PhotonStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "photon pass: {} emitted, {} stored, {} rays, traced in {:.3} s, k-d tree built in {:.3} s, \
+            "photon pass: {} emitted, {} stored{}, {} rays, traced in {:.3} s, k-d tree built in {:.3} s, \
              {} irradiance sites precomputed in {:.3} s, {:.1} MiB ({:.1} bytes per photon)",
             self.emitted,
             self.stored,
+            if self.volume_stored > 0 {
+                format!(" (+ {} in the volume map)", self.volume_stored)
+            } else {
+                String::new()
+            },
             self.rays,
             self.trace_time.as_secs_f64(),
             self.build_time.as_secs_f64(),
             self.precomputed_sites,
             self.precompute_time.as_secs_f64(),
             self.memory_bytes as f64 / (1024.0 * 1024.0),
-            if self.stored > 0 {
-                self.memory_bytes as f64 / self.stored as f64
+            if self.stored + self.volume_stored > 0 {
+                self.memory_bytes as f64 / (self.stored + self.volume_stored) as f64
             } else {
                 0.0
             }
@@ -108,7 +117,7 @@ impl fmt::Display for PhotonStats {
 /// current rayon pool (direct gathers: no precomputation; no coarse
 /// positions, as in a render without `--debug photons`).
 pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
-    photon_pass_with(scene, accel, count, None, false)
+    photon_pass_with(scene, accel, count, None, false, PhotonRules::Whitted)
 }
 
 /// [`photon_pass`], then, with `precompute`, the irradiance at the stored
@@ -124,8 +133,9 @@ pub fn photon_pass_with(
     count: u64,
     precompute: Option<&Precompute>,
     keep_positions: bool,
+    rules: PhotonRules,
 ) -> (PhotonMap, PhotonStats) {
-    let traced = trace_photons(scene, accel, count, precompute.is_some());
+    let traced = trace_photons_with(scene, accel, count, precompute.is_some(), rules);
     build_photon_map(traced, precompute, keep_positions)
 }
 
@@ -140,6 +150,11 @@ pub struct TracedPhotons {
     pub positions: Vec<[f32; 3]>,
     /// Their packed power and direction, in the same order.
     pub records: Vec<PhotonRecord>,
+    /// Positions of the photons stored in the volume map (physically
+    /// based rules in a medium; empty otherwise), in emission order.
+    pub volume_positions: Vec<[f32; 3]>,
+    /// Their packed power and direction of travel reversed.
+    pub volume_records: Vec<PhotonRecord>,
     /// Candidate irradiance sites: each stored photon whose emission index
     /// is a multiple of [`PRECOMPUTE_STRIDE`], in order (empty when not
     /// collected).
@@ -156,8 +171,19 @@ pub struct TracedPhotons {
 /// (deterministic for any thread count), collecting the candidate
 /// irradiance sites when `with_sites`.
 pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: bool) -> TracedPhotons {
+    trace_photons_with(scene, accel, count, with_sites, PhotonRules::Whitted)
+}
+
+/// [`trace_photons`] under the given scattering rules.
+pub fn trace_photons_with(
+    scene: &Scene,
+    accel: &dyn Accel,
+    count: u64,
+    with_sites: bool,
+    rules: PhotonRules,
+) -> TracedPhotons {
     let start = Instant::now();
-    let tracer = PhotonTracer::new(scene, accel, count);
+    let tracer = PhotonTracer::with_rules(scene, accel, count, rules);
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
     // arrive), they never move while growing; growth by doubling copied
@@ -170,6 +196,8 @@ pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: b
     } else {
         Vec::new()
     };
+    let mut volume_positions: Vec<[f32; 3]> = Vec::new();
+    let mut volume_records: Vec<PhotonRecord> = Vec::new();
     let mut rays = 0u64;
     // Tracing and packing run in parallel; the copies of one batch into the
     // final arrays (memcpy of 20 bytes per photon, and the page faults of
@@ -189,11 +217,18 @@ pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: b
                 let mut out = TracedChunk {
                     positions: Vec::with_capacity(most),
                     records: Vec::with_capacity(most),
+                    volume_positions: Vec::new(),
+                    volume_records: Vec::new(),
                     sites: Vec::new(),
                     rays: 0,
                 };
-                out.rays = tracer.trace_range(first, last, |i, p| {
-                    if p.position.is_finite() && p.power.is_finite() {
+                out.rays = tracer.trace_range(first, last, |i, p, volume| {
+                    if volume {
+                        if p.position.is_finite() && p.power.is_finite() {
+                            out.volume_positions.push(p.position.to_array());
+                            out.volume_records.push(PhotonRecord::new(p.power, p.incoming));
+                        }
+                    } else if p.position.is_finite() && p.power.is_finite() {
                         out.positions.push(p.position.to_array());
                         out.records.push(PhotonRecord::new(p.power, p.incoming));
                         if with_sites && i % PRECOMPUTE_STRIDE as u64 == 0 {
@@ -213,6 +248,8 @@ pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: b
             rays += chunk.rays;
             positions.extend_from_slice(&chunk.positions);
             records.extend_from_slice(&chunk.records);
+            volume_positions.extend_from_slice(&chunk.volume_positions);
+            volume_records.extend_from_slice(&chunk.volume_records);
             sites.extend_from_slice(&chunk.sites);
         }
     };
@@ -231,6 +268,8 @@ pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: b
         emitted: count,
         positions,
         records,
+        volume_positions,
+        volume_records,
         sites,
         has_sites: with_sites,
         rays,
@@ -256,6 +295,8 @@ pub fn build_photon_map(
         emitted: count,
         positions,
         records,
+        volume_positions,
+        volume_records,
         mut sites,
         rays,
         trace_time,
@@ -263,7 +304,11 @@ pub fn build_photon_map(
     } = traced;
     let build_start = Instant::now();
     let stored = positions.len() as u64;
+    let volume_stored = volume_positions.len() as u64;
     let mut map = PhotonMap::build(positions, records, keep_positions);
+    if volume_stored > 0 {
+        map.volume = Some(Box::new(PhotonMap::build(volume_positions, volume_records, false)));
+    }
     let build_time = build_start.elapsed();
     let precompute_start = Instant::now();
     if let Some(pre) = precompute {
@@ -276,6 +321,7 @@ pub fn build_photon_map(
     let stats = PhotonStats {
         emitted: count,
         stored,
+        volume_stored,
         rays,
         trace_time,
         build_time,

@@ -8,10 +8,12 @@ use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{SamplerKind, Vec3A};
 use crate::scene::desc::{
-    AdaptiveGoalName, CameraDesc, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName, SharingName,
-    Spanned, ToneMapName, TriangleTestName,
+    AdaptiveGoalName, CameraDesc, CausticsName, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName,
+    SharingName, Spanned, ToneMapName, TriangleTestName,
 };
-use crate::scene::{AdaptiveGoal, Camera, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing};
+use crate::scene::{
+    AdaptiveGoal, Camera, CausticsMode, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing,
+};
 
 /// Largest `max_depth`.
 pub const MAX_DEPTH: u32 = 64;
@@ -226,6 +228,11 @@ impl Ctx<'_> {
                 None => d.gather,
                 Some(GatherName::Precomputed) => GatherMode::Precomputed,
                 Some(GatherName::Direct) => GatherMode::Direct,
+            },
+            caustics: match p.caustics {
+                None => d.caustics,
+                Some(CausticsName::Path) => CausticsMode::Path,
+                Some(CausticsName::Map) => CausticsMode::Map,
             },
         })
     }
