@@ -38,7 +38,7 @@
 
 use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
-use super::photon::{GatherParams, Kernel, PhotonMap, PHOTON_PATH_DEPTH};
+use super::photon::{GatherParams, Kernel, PhotonMap, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
 use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
@@ -63,10 +63,6 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 /// How much larger than the surface gather's radius the volume gather's is:
 /// photons that scatter fill a volume, so they lie much farther apart.
 pub const VOLUME_RADIUS_SCALE: f32 = 4.0;
-
-/// How many times fewer photons vertices after the camera path's first
-/// non-specular one gather.
-pub const INDIRECT_GATHER_DIVISOR: usize = 4;
 
 /// The caustic maps and how to gather them: `[first vertex, later ones]`.
 struct Caustics<'a> {

@@ -531,14 +531,15 @@ impl RenderPlan {
                 "photon pass",
                 format!(
                     "{count} photons through the path integrator's BSDFs, emission restricted to \
-                     {casters} caster(s) with a delta lobe; caustics (L S+ D{}) from the map at the \
-                     first non-specular vertex, gather {k} nearest within {max_radius:.4}, cone \
-                     filter k = {cone_k}, BSDF-weighted",
+                     {casters} caster(s) with a delta lobe; caustics (L S+ D{}) from the map at every \
+                     non-specular vertex, gather {k} nearest ({} after the first) within \
+                     {max_radius:.4}, cone filter k = {cone_k}, BSDF-weighted",
                     if matches!(self.medium, MediumPlan::Run { .. }) {
                         ", and L S+ V in the water"
                     } else {
                         ""
-                    }
+                    },
+                    (k as usize / super::photon::INDIRECT_GATHER_DIVISOR).max(1)
                 ),
             ),
             PhotonPlan::Run {

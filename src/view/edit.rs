@@ -7,7 +7,7 @@ use super::orbit::Orbit;
 use crate::film::output::write_atomically;
 use crate::film::OutputError;
 use crate::math::Vec3A;
-use crate::scene::{self, Light, Material, Scene, SceneError, ShadingModel};
+use crate::scene::{self, IntegratorKind, Light, Material, Scene, SceneError, ShadingModel};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
@@ -346,6 +346,9 @@ pub fn same_photons(a: &Scene, b: &Scene) -> bool {
             ma == mb
                 || (!ma.is_specular()
                     && !mb.is_specular()
+                    // The path integrator's photons reflect off clear
+                    // coats with a probability that depends on the colour.
+                    && (sa.integrator == IntegratorKind::Whitted || ma.coating.is_none())
                     && ma.is_diffuse() == mb.is_diffuse()
                     && ma.coating == mb.coating
                     && ma.conductor == mb.conductor

@@ -43,6 +43,10 @@ pub fn cone_normalisation(cone_k: f32) -> f32 {
     1.0 - 2.0 / (3.0 * cone_k)
 }
 
+/// How many times fewer photons the path integrator's vertices after a
+/// path's first non-specular one gather (their blur is hidden by the bounce).
+pub const INDIRECT_GATHER_DIVISOR: usize = 4;
+
 /// Integral of the cone filter over the volume-normalised ball:
 /// `∫_ball w dV / (4/3 π r³) = 3 ∫0^1 (1 − x/k_c) x² dx = 1 − 3/(4 k_c)`.
 #[inline]

@@ -22,7 +22,7 @@ pub mod precomputed;
 
 pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
-pub use gather::{GatherParams, Kernel};
+pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
 pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 
