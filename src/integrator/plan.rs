@@ -103,8 +103,12 @@ pub enum PhotonPlan {
         max_radius: f32,
         /// Cone-filter constant.
         cone_k: f32,
-        /// How shading points evaluate the estimate.
+        /// How shading points evaluate the estimate (direct gathers whenever
+        /// `progressive` is set: see [`ProgressivePlan`]).
         gather: crate::scene::GatherMode,
+        /// Progressive photon mapping, when `[photons] progressive = true`:
+        /// `count` is then the total over all sample indices.
+        progressive: Option<ProgressivePlan>,
     },
     /// No object is a mirror or dielectric: there is no caustic.
     NoSpecularCaster,
@@ -116,6 +120,24 @@ pub enum PhotonPlan {
     CountZero,
     /// The path integrator finds caustics by path tracing.
     PathTraced,
+}
+
+/// Progressive photon mapping (Knaus & Zwicker 2011, "Progressive Photon
+/// Mapping: A Probabilistic Approach"): sample index `s` of every pixel
+/// gathers from its own independent map of [`photons_per_pass`](Self::photons_per_pass)
+/// photons, all of them within the fixed radius `r_{s+1}`, where
+/// `r_1 = max_radius` and `r_{i+1}² = r_i² (i + α)/(i + 1)`
+/// (`photon::progressive`). A pixel's mean over its samples is then the
+/// progressive estimate, whose bias and variance both vanish as samples grow.
+/// The precomputed irradiance is skipped (each map serves one sample per
+/// pixel: nothing to amortise) and photon files are refused (each pass
+/// traces its own map).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProgressivePlan {
+    /// Knaus & Zwicker's `α ∈ (0, 1)`.
+    pub alpha: f32,
+    /// Photons each sample index's map emits: `max(1, count / spp)`.
+    pub photons_per_pass: u64,
 }
 
 /// Exponential fog.
@@ -263,7 +285,15 @@ impl RenderPlan {
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
-                gather: ps.gather,
+                gather: if ps.progressive {
+                    crate::scene::GatherMode::Direct
+                } else {
+                    ps.gather
+                },
+                progressive: ps.progressive.then(|| ProgressivePlan {
+                    alpha: ps.alpha,
+                    photons_per_pass: super::photon::progressive::photons_per_pass(ps.count, spp),
+                }),
             }
         };
         let fog = match &s.medium {
@@ -298,6 +328,15 @@ impl RenderPlan {
     /// True when the photon pass runs.
     pub fn runs_photons(&self) -> bool {
         matches!(self.photons, PhotonPlan::Run { .. })
+    }
+
+    /// Progressive photon mapping's plan, when the photon pass runs
+    /// progressively.
+    pub fn progressive(&self) -> Option<ProgressivePlan> {
+        match self.photons {
+            PhotonPlan::Run { progressive, .. } => progressive,
+            _ => None,
+        }
     }
 
     /// True when samples spread shadow strata and dielectric branches.
@@ -478,11 +517,28 @@ impl RenderPlan {
                 max_radius,
                 cone_k,
                 gather,
+                progressive: None,
             } => Stage::ran(
                 "photon pass",
                 format!(
                     "{count} photons, emission restricted to {casters} specular caster(s); \
                      gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}, {gather}"
+                ),
+            ),
+            PhotonPlan::Run {
+                casters,
+                max_radius,
+                cone_k,
+                progressive: Some(p),
+                ..
+            } => Stage::ran(
+                "photon pass",
+                format!(
+                    "progressive, {} photons per pass (one map per sample index, {} passes), r₁ = {max_radius:.4}, \
+                     α = {}, emission restricted to {casters} specular caster(s); gather every photon within \
+                     r_i (r_{{i+1}}² = r_i² (i + α)/(i + 1)), cone filter k = {cone_k}, direct gathers \
+                     (precomputed irradiance skipped: each map serves one sample per pixel)",
+                    p.photons_per_pass, self.spp, p.alpha
                 ),
             ),
             PhotonPlan::NoSpecularCaster => Stage::skipped("photon pass", "no specular caster"),

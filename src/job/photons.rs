@@ -56,6 +56,13 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
         triangle_test: scene.settings.triangle_test,
         ..request.accel_options.clone()
     };
+    if RenderPlan::new(&scene).progressive().is_some() {
+        return Err(JobError::Invalid(format!(
+            "{}: progressive photon mapping ([photons] progressive = true) traces a new map for every sample \
+             index during the render: there is no one map to save",
+            request.scene.display()
+        )));
+    }
     let Some(count) = planned_photons(&RenderPlan::new(&scene)) else {
         return Err(JobError::Invalid(format!(
             "{}: this scene's render runs no photon pass (no mirror or glass object, --photons 0, \
@@ -89,6 +96,13 @@ pub fn load_for(
     accel: AccelKind,
     options: &AccelOptions,
 ) -> Result<TracedPhotons, JobError> {
+    if RenderPlan::new(scene).progressive().is_some() {
+        return Err(JobError::Invalid(format!(
+            "--photon-map {}: progressive photon mapping ([photons] progressive = true, or \
+             --progressive-photons) traces a new map for every sample index; it cannot use a photon file",
+            path.display()
+        )));
+    }
     let Some(planned) = planned_photons(&RenderPlan::new(scene)) else {
         return Err(JobError::Invalid(format!(
             "--photon-map {}: this render runs no photon pass (no mirror or glass object, --photons 0, \

@@ -59,6 +59,10 @@ pub struct PhotonsDesc {
     pub cone_k: Option<Spanned<f64>>,
     /// `"precomputed"` or `"direct"`.
     pub gather: Option<GatherName>,
+    /// Progressive photon mapping: a new map and a smaller radius per sample.
+    pub progressive: Option<bool>,
+    /// Progressive photon mapping's radius reduction `α ∈ (0, 1)`.
+    pub alpha: Option<Spanned<f64>>,
 }
 
 /// Photon gather modes.

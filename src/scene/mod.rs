@@ -154,7 +154,20 @@ pub struct PhotonSettings {
     pub cone_k: f32,
     /// How shading points evaluate the estimate.
     pub gather: GatherMode,
+    /// Progressive photon mapping (Knaus & Zwicker 2011): every sample
+    /// index of a pixel gathers from its own map of `count / spp` photons
+    /// within a radius that shrinks from sample to sample
+    /// (`integrator::photon::progressive`).
+    pub progressive: bool,
+    /// Knaus & Zwicker's `α ∈ (0, 1)`: the fraction of the photons within
+    /// a radius kept by the next, `r_{i+1}² = r_i² (i + α)/(i + 1)`.
+    pub alpha: f32,
 }
+
+/// Default `[photons] alpha` of progressive photon mapping: 2/3, which
+/// Knaus & Zwicker (2011, §4.3) find balances the bias and variance of the
+/// estimate asymptotically.
+pub const DEFAULT_PPM_ALPHA: f32 = 2.0 / 3.0;
 
 /// How the caustic estimate is evaluated at shading points (`[photons] gather`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -176,6 +189,8 @@ impl Default for PhotonSettings {
             max_radius: None,
             cone_k: 1.1,
             gather: GatherMode::Precomputed,
+            progressive: false,
+            alpha: DEFAULT_PPM_ALPHA,
         }
     }
 }
