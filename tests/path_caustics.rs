@@ -118,6 +118,18 @@ fn map_and_path_caustics_converge_to_the_same_image() {
     eprintln!("map / path: image {ratio:.4}, caustic {caustic_ratio:.4}");
     assert!((ratio - 1.0).abs() < 0.03, "image mean ratio {ratio}");
     assert!((caustic_ratio - 1.0).abs() < 0.06, "caustic mean ratio {caustic_ratio}");
+    // Progressive photon mapping (a new map and a smaller radius per
+    // sample index) converges to the same image.
+    let mut progressive = with_map.clone();
+    progressive.settings.photons.progressive = true;
+    progressive.settings.photons.count = 4_000_000;
+    assert!(RenderPlan::new(&progressive).progressive().is_some());
+    let q = pixels(&progressive, 2);
+    let ratio = region_mean(&q, width, whole) / region_mean(&p, width, whole);
+    let caustic_ratio = region_mean(&q, width, caustic) / region_mean(&p, width, caustic);
+    eprintln!("progressive / path: image {ratio:.4}, caustic {caustic_ratio:.4}");
+    assert!((ratio - 1.0).abs() < 0.03, "progressive image mean ratio {ratio}");
+    assert!((caustic_ratio - 1.0).abs() < 0.06, "progressive caustic mean ratio {caustic_ratio}");
 }
 
 /// The physically based photons carry the power the casters receive:
@@ -175,6 +187,7 @@ intensity = 10.0
             s.settings.photons.count,
             false,
             PhotonRules::Physical,
+            0,
         );
         let mut sum = [0.0f64; 3];
         for r in &traced.records {

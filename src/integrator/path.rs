@@ -91,11 +91,11 @@ impl<'a> PathTracer<'a> {
         let gather = match plan.photons {
             PhotonPlan::Run {
                 k, max_radius, cone_k, ..
-            } => Some(GatherParams {
-                k: std::num::NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
+            } => Some(GatherParams::k_nearest(
+                std::num::NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
                 max_radius,
                 cone_k,
-            }),
+            )),
             _ => None,
         };
         Self {
@@ -113,6 +113,14 @@ impl<'a> PathTracer<'a> {
         }
     }
 
+    /// [`with_photons`](Self::with_photons) gathering as `gather` says
+    /// (progressive photon mapping's fixed radius of one sample index; the
+    /// volume map's radius is [`VOLUME_RADIUS_SCALE`] times larger).
+    pub fn with_photons_gathered(mut self, map: &'a PhotonMap, gather: GatherParams) -> Self {
+        self.gather = Some(gather);
+        self.with_photons(map)
+    }
+
     /// Adds the caustics of `map` (traced with `PhotonRules::Physical`), when
     /// the plan runs the photon pass.
     pub fn with_photons(mut self, map: &'a PhotonMap) -> Self {
@@ -123,6 +131,7 @@ impl<'a> PathTracer<'a> {
             };
             let volume = |g: GatherParams| GatherParams {
                 max_radius: g.max_radius * VOLUME_RADIUS_SCALE,
+                fixed_radius: g.fixed_radius.map(|r| r * VOLUME_RADIUS_SCALE),
                 ..g
             };
             self.caustics = Some(Caustics {

@@ -105,8 +105,12 @@ pub enum PhotonPlan {
         max_radius: f32,
         /// Cone-filter constant.
         cone_k: f32,
-        /// How shading points evaluate the estimate.
+        /// How shading points evaluate the estimate (direct gathers whenever
+        /// `progressive` is set: see [`ProgressivePlan`]).
         gather: crate::scene::GatherMode,
+        /// Progressive photon mapping, when `[photons] progressive = true`:
+        /// `count` is then the total over all sample indices.
+        progressive: Option<ProgressivePlan>,
     },
     /// No object is a mirror or dielectric: there is no caustic.
     NoSpecularCaster,
@@ -138,6 +142,24 @@ pub enum MediumPlan {
     None,
     /// A `[medium]` with the fog's keys only.
     NoCoefficients,
+}
+
+/// Progressive photon mapping (Knaus & Zwicker 2011, "Progressive Photon
+/// Mapping: A Probabilistic Approach"): sample index `s` of every pixel
+/// gathers from its own independent map of [`photons_per_pass`](Self::photons_per_pass)
+/// photons, all of them within the fixed radius `r_{s+1}`, where
+/// `r_1 = max_radius` and `r_{i+1}² = r_i² (i + α)/(i + 1)`
+/// (`photon::progressive`). A pixel's mean over its samples is then the
+/// progressive estimate, whose bias and variance both vanish as samples grow.
+/// The precomputed irradiance is skipped (each map serves one sample per
+/// pixel: nothing to amortise) and photon files are refused (each pass
+/// traces its own map).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProgressivePlan {
+    /// Knaus & Zwicker's `α ∈ (0, 1)`.
+    pub alpha: f32,
+    /// Photons each sample index's map emits: `max(1, count / spp)`.
+    pub photons_per_pass: u64,
 }
 
 /// Exponential fog.
@@ -296,8 +318,17 @@ impl RenderPlan {
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
-                // The BSDF-weighted estimate has nothing to precompute.
-                gather: if physical { GatherMode::Direct } else { ps.gather },
+                // The BSDF-weighted and the progressive estimates have
+                // nothing to precompute.
+                gather: if physical || ps.progressive {
+                    GatherMode::Direct
+                } else {
+                    ps.gather
+                },
+                progressive: ps.progressive.then(|| ProgressivePlan {
+                    alpha: ps.alpha,
+                    photons_per_pass: super::photon::progressive::photons_per_pass(ps.count, spp),
+                }),
             }
         };
         let medium = match s.medium.as_ref().map(|m| m.volume) {
@@ -347,6 +378,15 @@ impl RenderPlan {
     /// True when the photon pass runs.
     pub fn runs_photons(&self) -> bool {
         matches!(self.photons, PhotonPlan::Run { .. })
+    }
+
+    /// Progressive photon mapping's plan, when the photon pass runs
+    /// progressively.
+    pub fn progressive(&self) -> Option<ProgressivePlan> {
+        match self.photons {
+            PhotonPlan::Run { progressive, .. } => progressive,
+            _ => None,
+        }
     }
 
     /// True when samples spread shadow strata and dielectric branches.
@@ -526,20 +566,36 @@ impl RenderPlan {
                 k,
                 max_radius,
                 cone_k,
+                progressive,
                 ..
             } if self.photon_rules == PhotonRules::Physical => Stage::ran(
                 "photon pass",
                 format!(
-                    "{count} photons through the path integrator's BSDFs, emission restricted to \
+                    "{} through the path integrator's BSDFs, emission restricted to \
                      {casters} caster(s) with a delta lobe; caustics (L S+ D{}) from the map at every \
-                     non-specular vertex, gather {k} nearest ({} after the first) within \
-                     {max_radius:.4}, cone filter k = {cone_k}, BSDF-weighted",
+                     non-specular vertex, {}, cone filter k = {cone_k}, BSDF-weighted",
+                    match progressive {
+                        Some(p) => format!(
+                            "progressive, {} photons per pass (one map per sample index, {} passes)",
+                            p.photons_per_pass, self.spp
+                        ),
+                        None => format!("{count} photons"),
+                    },
                     if matches!(self.medium, MediumPlan::Run { .. }) {
                         ", and L S+ V in the water"
                     } else {
                         ""
                     },
-                    (k as usize / super::photon::INDIRECT_GATHER_DIVISOR).max(1)
+                    match progressive {
+                        Some(p) => format!(
+                            "every photon within r_i, r₁ = {max_radius:.4}, r_{{i+1}}² = r_i² (i + α)/(i + 1), α = {}",
+                            p.alpha
+                        ),
+                        None => format!(
+                            "gather {k} nearest ({} after the first) within {max_radius:.4}",
+                            (k as usize / super::photon::INDIRECT_GATHER_DIVISOR).max(1)
+                        ),
+                    }
                 ),
             ),
             PhotonPlan::Run {
@@ -549,11 +605,28 @@ impl RenderPlan {
                 max_radius,
                 cone_k,
                 gather,
+                progressive: None,
             } => Stage::ran(
                 "photon pass",
                 format!(
                     "{count} photons, emission restricted to {casters} specular caster(s); \
                      gather {k} nearest within {max_radius:.4}, cone filter k = {cone_k}, {gather}"
+                ),
+            ),
+            PhotonPlan::Run {
+                casters,
+                max_radius,
+                cone_k,
+                progressive: Some(p),
+                ..
+            } => Stage::ran(
+                "photon pass",
+                format!(
+                    "progressive, {} photons per pass (one map per sample index, {} passes), r₁ = {max_radius:.4}, \
+                     α = {}, emission restricted to {casters} specular caster(s); gather every photon within \
+                     r_i (r_{{i+1}}² = r_i² (i + α)/(i + 1)), cone filter k = {cone_k}, direct gathers \
+                     (precomputed irradiance skipped: each map serves one sample per pixel)",
+                    p.photons_per_pass, self.spp, p.alpha
                 ),
             ),
             PhotonPlan::NoSpecularCaster => Stage::skipped("photon pass", "no specular caster"),

@@ -15,6 +15,7 @@
 
 use super::aov::{AovTracer, AOV_SAMPLES};
 use super::path::PathTracer;
+use super::photon::progressive::ProgressiveSchedule;
 use super::photon::{
     build_photon_map, photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache,
     TracedPhotons,
@@ -218,7 +219,9 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
     ))
 }
 
-/// The photons `plan` emits and its precompute, when it runs the photon pass.
+/// The photons `plan` emits and its precompute, when it runs the photon
+/// pass before the image (not progressive photon mapping, whose maps the
+/// pass loop traces: see [`progressive_schedule`]).
 fn photon_work(plan: &RenderPlan) -> Option<(u64, Option<Precompute>)> {
     match plan.photons {
         PhotonPlan::Run {
@@ -227,6 +230,7 @@ fn photon_work(plan: &RenderPlan) -> Option<(u64, Option<Precompute>)> {
             max_radius,
             cone_k,
             gather,
+            progressive: None,
             ..
         } => {
             let precompute = match gather {
@@ -236,6 +240,7 @@ fn photon_work(plan: &RenderPlan) -> Option<(u64, Option<Precompute>)> {
                         k: NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
                         max_radius,
                         cone_k,
+                        fixed_radius: None,
                     },
                     plan.width as u64 * plan.height as u64,
                 )),
@@ -246,7 +251,30 @@ fn photon_work(plan: &RenderPlan) -> Option<(u64, Option<Precompute>)> {
     }
 }
 
-/// Photons `plan` emits, when it runs the photon pass.
+/// Progressive photon mapping's schedule, when `plan` runs it: `r_1` is
+/// the plan's resolved `max_radius` (see `photon::progressive`).
+pub fn progressive_schedule(plan: &RenderPlan) -> Option<ProgressiveSchedule> {
+    match plan.photons {
+        PhotonPlan::Run {
+            max_radius,
+            cone_k,
+            progressive: Some(p),
+            ..
+        } => Some(ProgressiveSchedule {
+            r1: max_radius,
+            alpha: p.alpha,
+            photons_per_pass: p.photons_per_pass,
+            cone_k,
+            keep_positions: plan.keep_photon_positions,
+            rules: plan.photon_rules,
+        }),
+        _ => None,
+    }
+}
+
+/// Photons `plan` emits before the image, when it runs that photon pass
+/// (`None` for progressive photon mapping, which traces one map per sample
+/// index during the render).
 pub fn planned_photons(plan: &RenderPlan) -> Option<u64> {
     photon_work(plan).map(|(count, _)| count)
 }
@@ -331,8 +359,11 @@ pub fn render_with_traced(
     };
     let mut out = render_progressive(scene, accel, plan, map.as_deref(), start, control);
     out.stats.wall_time = begin.elapsed();
-    out.stats.photons = photon_stats;
-    out.photon_map = map;
+    // Progressive photon mapping's maps are the pass loop's own.
+    if photon_stats.is_some() {
+        out.stats.photons = photon_stats;
+        out.photon_map = map;
+    }
     out
 }
 
@@ -360,6 +391,17 @@ pub fn render_with_photons(
 /// until every pixel has `plan.spp` samples, the sample limit is reached or
 /// the render is cancelled.
 ///
+/// With progressive photon mapping ([`progressive_schedule`]) `photons` is
+/// not used: each pass renders its sample indices `s` one at a time, every
+/// pixel's sample `s` with map `s`, traced just before (and dropped once
+/// the next is needed, so one map lives at a time) and gathered within
+/// `r_{s+1}`. A pixel's sample `s` is then the same whatever the passes,
+/// threads, shards or interruptions, as without photons; the passes end at
+/// the sample counts of an uninterrupted render's (4, 8, 16, …) even after
+/// a resume mid-pass, so adaptive sampling decides at the same counts.
+/// The last map is returned in [`RenderOutput::photon_map`] and the maps'
+/// totals in the statistics.
+///
 /// # Panics
 /// If `start` is not `plan.width × plan.height`.
 pub fn render_progressive(
@@ -382,28 +424,22 @@ pub fn render_progressive(
     let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
     let total = width as u64 * height as u64 * spp as u64;
 
-    let integrator = match plan.integrator {
-        IntegratorKind::Whitted => {
-            let mut w = Whitted::new(scene, accel, plan);
-            if let Some(map) = photons {
-                w = w.with_photons(map);
-            }
-            Tracer::Whitted(w)
-        }
-        IntegratorKind::Path => {
-            let mut p = PathTracer::new(scene, accel, plan);
-            if let Some(map) = photons {
-                p = p.with_photons(map);
-            }
-            Tracer::Path(p)
-        }
-    };
+    let schedule = progressive_schedule(plan);
+    let integrator = tracer(
+        scene,
+        accel,
+        plan,
+        photons.filter(|_| schedule.is_none()).map(|m| (m, None)),
+    );
     let aovs = AovTracer::new(scene, accel);
     let stop = Stop {
         cancel: control.cancel,
         deadline: control.deadline,
     };
     let done = AtomicU64::new(start.samples_taken());
+    // Progressive photon mapping: the maps' totals and the latest map.
+    let mut photon_totals: Option<PhotonStats> = None;
+    let mut last_map: Option<Arc<PhotonMap>> = None;
     let states = split_into_tiles(&start);
     let last_checkpoint = Mutex::new(Instant::now());
     let mut stats = RenderStats::default();
@@ -426,30 +462,58 @@ pub fn render_progressive(
         if level >= limit || stop.is_due() {
             break;
         }
-        let target = next_pass_target(level, limit);
-        let work: Vec<PassWork> = states
-            .par_iter()
-            .map(|state| {
-                let work = {
-                    let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
-                    render_tile_pass(scene, &integrator, &aovs, plan, &mut state, target, &stop)
-                };
-                if work.samples > 0 {
-                    let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
-                    (control.progress)(now, total);
-                }
-                if let Some(hook) = &control.checkpoint {
-                    // One worker saves; the others skip and go on rendering.
-                    if let Ok(mut last) = last_checkpoint.try_lock() {
-                        if last.elapsed() >= hook.every {
-                            (hook.save)(&snapshot(&states, width, height));
-                            *last = Instant::now();
+        let run_pass = |integrator: &Tracer, target: u32| -> Vec<PassWork> {
+            states
+                .par_iter()
+                .map(|state| {
+                    let work = {
+                        let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
+                        render_tile_pass(scene, integrator, &aovs, plan, &mut state, target, &stop)
+                    };
+                    if work.samples > 0 {
+                        let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
+                        (control.progress)(now, total);
+                    }
+                    if let Some(hook) = &control.checkpoint {
+                        // One worker saves; the others skip and go on rendering.
+                        if let Ok(mut last) = last_checkpoint.try_lock() {
+                            if last.elapsed() >= hook.every {
+                                (hook.save)(&snapshot(&states, width, height));
+                                *last = Instant::now();
+                            }
                         }
                     }
+                    work
+                })
+                .collect()
+        };
+        let work = match &schedule {
+            None => run_pass(&integrator, next_pass_target(level, limit)),
+            Some(schedule) => {
+                // Progressive photon mapping: sample index by sample index,
+                // each with its own map and radius. Every pixel still
+                // sampling has at least `level` samples and needs every
+                // index up to `target`, so each map serves them all.
+                let target = aligned_pass_target(level, limit);
+                let mut work = Vec::new();
+                let mut radii = schedule.radii_from(level);
+                for s in level..target {
+                    if stop.is_due() {
+                        break;
+                    }
+                    // Free the previous map first: one map lives at a time.
+                    drop(last_map.take());
+                    let (map, map_stats) = schedule.trace(scene, accel, s);
+                    photon_totals.get_or_insert_with(PhotonStats::default).add(&map_stats);
+                    let pass_tracer = tracer(scene, accel, plan, Some((&map, Some(schedule.gather_at(&radii)))));
+                    work.extend(run_pass(&pass_tracer, s + 1));
+                    drop(pass_tracer);
+                    last_map = Some(Arc::new(map));
+                    radii.advance();
                 }
                 work
-            })
-            .collect();
+            }
+        };
         for w in work {
             stats.rays += w.rays;
             stats.samples += w.samples;
@@ -462,13 +526,64 @@ pub fn render_progressive(
 
     let accumulation = snapshot(&states, width, height);
     stats.wall_time = begin.elapsed();
+    stats.photons = photon_totals;
     RenderOutput {
         film: accumulation.to_film(),
         complete: accumulation.is_complete(spp),
         timed_out: control.deadline.is_some_and(|d| Instant::now() >= d) && !accumulation.is_complete(spp),
         accumulation,
         stats,
-        photon_map: None,
+        photon_map: last_map,
+    }
+}
+
+/// The sample count at the end of the pass of an uninterrupted render that
+/// `level` falls in: the first of 4, 8, 16, 32, 48, … ([`next_pass_target`]
+/// from 0) above `level`, at most `limit`. Progressive photon mapping
+/// renders a pass sample index by sample index, so an interrupted render
+/// can stop between them; resuming to this target keeps the passes (and
+/// adaptive sampling's decisions between them) those of the uninterrupted
+/// render.
+pub fn aligned_pass_target(level: u32, limit: u32) -> u32 {
+    let mut t = 0;
+    while t <= level {
+        let next = next_pass_target(t, limit);
+        if next == t {
+            break;
+        }
+        t = next;
+    }
+    t.min(limit)
+}
+
+/// The integrator of a render, with `caustics` (a map and, when given, the
+/// gather to use instead of the plan's: progressive photon mapping's fixed
+/// radius) when the plan runs a photon pass.
+fn tracer<'a>(
+    scene: &'a Scene,
+    accel: &'a dyn Accel,
+    plan: &'a RenderPlan,
+    caustics: Option<(&'a PhotonMap, Option<GatherParams>)>,
+) -> Tracer<'a> {
+    match plan.integrator {
+        IntegratorKind::Whitted => {
+            let mut w = Whitted::new(scene, accel, plan);
+            match caustics {
+                Some((map, None)) => w = w.with_photons(map),
+                Some((map, Some(g))) => w = w.with_photons_gathered(map, g),
+                None => {}
+            }
+            Tracer::Whitted(w)
+        }
+        IntegratorKind::Path => {
+            let mut p = PathTracer::new(scene, accel, plan);
+            match caustics {
+                Some((map, None)) => p = p.with_photons(map),
+                Some((map, Some(g))) => p = p.with_photons_gathered(map, g),
+                None => {}
+            }
+            Tracer::Path(Box::new(p))
+        }
     }
 }
 
@@ -598,7 +713,7 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
 /// The integrator a render uses.
 enum Tracer<'a> {
     Whitted(Whitted<'a>),
-    Path(PathTracer<'a>),
+    Path(Box<PathTracer<'a>>),
 }
 
 /// Brings every pixel of the tile to `target` samples (pixels already there
@@ -846,6 +961,24 @@ mod tests {
         assert_eq!(next_pass_target(3, 4), 4);
         assert_eq!(next_pass_target(3, 20), 7);
         assert_eq!(next_pass_target(5, 5), 5);
+        // A level inside a pass resumes to that pass's end.
+        for (level, limit, target) in [
+            (0, 70, 4),
+            (5, 70, 8),
+            (8, 70, 16),
+            (33, 70, 48),
+            (65, 70, 70),
+            (3, 3, 3),
+        ] {
+            assert_eq!(
+                aligned_pass_target(level, limit),
+                target,
+                "level {level}, limit {limit}"
+            );
+        }
+        for level in [0u32, 4, 8, 16, 32, 48] {
+            assert_eq!(aligned_pass_target(level, 70), next_pass_target(level, 70));
+        }
     }
 
     #[test]

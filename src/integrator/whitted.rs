@@ -162,8 +162,20 @@ impl<'a> Whitted<'a> {
                     k: std::num::NonZero::new(k.max(1) as usize).expect("k ≥ 1"),
                     max_radius,
                     cone_k,
+                    fixed_radius: None,
                 },
             ));
+        }
+        self
+    }
+
+    /// Adds the caustic radiance estimate from `map` gathered with `g`
+    /// instead of the plan's gather (progressive photon mapping: the fixed
+    /// radius of the map's sample index); no effect when the plan skips the
+    /// photon pass.
+    pub fn with_photons_gathered(mut self, map: &'a PhotonMap, g: GatherParams) -> Self {
+        if self.plan.runs_photons() {
+            self.caustics = Some((map, g));
         }
         self
     }

@@ -84,7 +84,18 @@ fn fingerprint_of(
         Some(head) => format!("{head} }}"),
         None => text,
     };
+    // Progressive photon mapping's keys are left out of the text too (the
+    // text of a render without them stays the one before they existed) and
+    // hashed as a field of their own, only when it is on: a checkpoint of a
+    // non-progressive render never resumes a progressive one, nor one of
+    // another α. `alpha` changes nothing without `progressive`.
+    let p = &settings.photons;
+    let ppm_keys = format!(", progressive: {:?}, alpha: {:?}", p.progressive, p.alpha);
+    let text = text.replacen(&ppm_keys, "", 1);
     field("settings", text.as_bytes());
+    if p.progressive {
+        field("progressive photons", format!("alpha {:?}", p.alpha).as_bytes());
+    }
     field("camera", format!("{:?}", scene.camera).as_bytes());
     field("materials", format!("{:?}", scene.materials).as_bytes());
     field("lights", format!("{:?}", scene.lights).as_bytes());
@@ -165,5 +176,17 @@ mod tests {
         assert_ne!(base, fingerprint(&s, AccelKind::KdTree, ""));
         assert_ne!(base, fingerprint(&scene(), AccelKind::Brute, ""));
         assert_ne!(base, fingerprint(&scene(), AccelKind::KdTree, "robust"));
+        // Progressive photon mapping: on changes it, α only when on.
+        let mut s = scene();
+        s.settings.photons.alpha = 0.5;
+        assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        s.settings.photons.progressive = true;
+        let progressive = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, progressive);
+        s.settings.photons.alpha = 0.6;
+        assert_ne!(progressive, fingerprint(&s, AccelKind::KdTree, ""));
+        // The keys the text leaves out are found in it.
+        let text = format!("{:?}", RenderSettings::default());
+        assert!(text.contains(", progressive: false, alpha: 0.6666667 }"), "{text}");
     }
 }

@@ -50,6 +50,10 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// Photons emitted by the caustic pass (0 turns it off).
     pub photons: Option<u64>,
+    /// Progressive photon mapping on or off (`[photons] progressive`).
+    pub progressive_photons: Option<bool>,
+    /// Progressive photon mapping's `α ∈ (0, 1)` (`[photons] alpha`).
+    pub ppm_alpha: Option<f32>,
     /// Ray–triangle test of the in-house accelerators.
     pub triangle_test: Option<TriangleTest>,
     /// Light transport algorithm.
@@ -81,6 +85,18 @@ impl Overrides {
             crate::limits::check_photon_count(n)
                 .map_err(|e| JobError::Invalid(format!("{}: --photons: {e}", source.display())))?;
             s.photons.count = n;
+        }
+        if let Some(p) = self.progressive_photons {
+            s.photons.progressive = p;
+        }
+        if let Some(a) = self.ppm_alpha {
+            if !(a > 0.0 && a < 1.0) {
+                return Err(JobError::Invalid(format!(
+                    "--ppm-alpha {a}: must be in (0, 1) (the fraction of photons each progressive pass keeps; \
+                     2/3 by default)"
+                )));
+            }
+            s.photons.alpha = a;
         }
         if let Some(t) = self.triangle_test {
             s.triangle_test = t;
@@ -407,6 +423,14 @@ impl RenderJob {
                     fingerprint::differences(&c.meta, &meta)
                 )));
             }
+        }
+        if request.photon_map.is_some() && scene.settings.photons.progressive {
+            return Err(JobError::Invalid(format!(
+                "--photon-map: {} renders with progressive photon mapping ([photons] progressive = true or \
+                 --progressive-photons), which traces a new map for every sample index; it cannot use a photon \
+                 file",
+                request.scene.display()
+            )));
         }
         let photons = match &request.photon_map {
             Some(path) => Some(photons::load_for(path, &scene, accel, &accel_options)?),

@@ -56,6 +56,13 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
         triangle_test: scene.settings.triangle_test,
         ..request.accel_options.clone()
     };
+    if RenderPlan::new(&scene).progressive().is_some() {
+        return Err(JobError::Invalid(format!(
+            "{}: progressive photon mapping ([photons] progressive = true) traces a new map for every sample \
+             index during the render: there is no one map to save",
+            request.scene.display()
+        )));
+    }
     let plan = RenderPlan::new(&scene);
     if plan.photon_rules == PhotonRules::Physical {
         return Err(JobError::Invalid(format!(
@@ -97,6 +104,13 @@ pub fn load_for(
     accel: AccelKind,
     options: &AccelOptions,
 ) -> Result<TracedPhotons, JobError> {
+    if RenderPlan::new(scene).progressive().is_some() {
+        return Err(JobError::Invalid(format!(
+            "--photon-map {}: progressive photon mapping ([photons] progressive = true, or \
+             --progressive-photons) traces a new map for every sample index; it cannot use a photon file",
+            path.display()
+        )));
+    }
     let plan = RenderPlan::new(scene);
     if plan.photon_rules == PhotonRules::Physical {
         return Err(JobError::Invalid(format!(

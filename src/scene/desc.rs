@@ -61,6 +61,10 @@ pub struct PhotonsDesc {
     pub gather: Option<GatherName>,
     /// `"path"` or `"map"`.
     pub caustics: Option<CausticsName>,
+    /// Progressive photon mapping: a new map and a smaller radius per sample.
+    pub progressive: Option<bool>,
+    /// Progressive photon mapping's radius reduction `α ∈ (0, 1)`.
+    pub alpha: Option<Spanned<f64>>,
 }
 
 /// How the path integrator finds caustics.

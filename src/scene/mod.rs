@@ -157,6 +157,14 @@ pub struct PhotonSettings {
     /// How the path integrator finds caustics (the Whitted integrator
     /// always uses the map).
     pub caustics: CausticsMode,
+    /// Progressive photon mapping (Knaus & Zwicker 2011): every sample
+    /// index of a pixel gathers from its own map of `count / spp` photons
+    /// within a radius that shrinks from sample to sample
+    /// (`integrator::photon::progressive`).
+    pub progressive: bool,
+    /// Knaus & Zwicker's `α ∈ (0, 1)`: the fraction of the photons within
+    /// a radius kept by the next, `r_{i+1}² = r_i² (i + α)/(i + 1)`.
+    pub alpha: f32,
 }
 
 /// How the path integrator finds caustics (`[photons] caustics`).
@@ -167,11 +175,16 @@ pub enum CausticsMode {
     #[default]
     Path,
     /// From a photon map of light → specular → diffuse (L S+ D) paths,
-    /// added at the camera path's first non-specular vertex, plus a
+    /// added at the camera path's non-specular vertices, plus a
     /// volumetric map of light scattered in the water after a specular
     /// bounce (L S+ V); path tracing then leaves those paths out.
     Map,
 }
+
+/// Default `[photons] alpha` of progressive photon mapping: 2/3, which
+/// Knaus & Zwicker (2011, §4.3) find balances the bias and variance of the
+/// estimate asymptotically.
+pub const DEFAULT_PPM_ALPHA: f32 = 2.0 / 3.0;
 
 /// How the caustic estimate is evaluated at shading points (`[photons] gather`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -194,6 +207,8 @@ impl Default for PhotonSettings {
             cone_k: 1.1,
             gather: GatherMode::Precomputed,
             caustics: CausticsMode::Path,
+            progressive: false,
+            alpha: DEFAULT_PPM_ALPHA,
         }
     }
 }

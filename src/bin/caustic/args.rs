@@ -211,6 +211,15 @@ pub struct RenderArgs {
     /// Override the number of photons emitted for caustics (0 turns the pass off).
     #[arg(long)]
     pub photons: Option<u64>,
+    /// Progressive photon mapping (also `[photons] progressive = true`): every
+    /// sample index traces its own map of photons/spp photons, gathered within
+    /// a radius that shrinks from sample to sample, so caustics converge.
+    #[arg(long)]
+    pub progressive_photons: bool,
+    /// Progressive photon mapping's alpha in (0, 1) (default the scene's
+    /// `[photons] alpha`, else 2/3): r_{i+1}² = r_i² (i + alpha)/(i + 1).
+    #[arg(long)]
+    pub ppm_alpha: Option<f32>,
     /// Overlay a debug view on the image: the photon map as points (the original
     /// report's 'p' key) or the KD-tree's boxes (its 'k' key).
     #[arg(long, value_enum)]
@@ -483,6 +492,13 @@ pub struct ConvergeArgs {
     /// Override the scene's photon count (the default for SPP and time budgets).
     #[arg(long)]
     pub photons: Option<u64>,
+    /// Progressive photon mapping for every curve (see `render --progressive-photons`):
+    /// a budget's photons are shared out over its samples' maps.
+    #[arg(long)]
+    pub progressive_photons: bool,
+    /// Progressive photon mapping's alpha (see `render --ppm-alpha`).
+    #[arg(long)]
+    pub ppm_alpha: Option<f32>,
     /// relMSE epsilon: (x - ref)^2 / (ref^2 + epsilon).
     #[arg(long, default_value_t = caustic::analysis::converge::RELMSE_EPSILON)]
     pub epsilon: f64,

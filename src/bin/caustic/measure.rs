@@ -136,6 +136,8 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         height: args.height,
         seed: args.seed,
         photons: args.photons,
+        progressive_photons: args.progressive_photons.then_some(true),
+        ppm_alpha: args.ppm_alpha,
         triangle_test: args.backend.triangle_test(),
         integrator: args.integrator.map(Into::into),
         sampler: args.sampler.map(Into::into),

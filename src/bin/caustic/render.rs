@@ -38,6 +38,8 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             spp: args.spp.or(args.max_spp),
             seed: args.seed,
             photons: args.photons,
+            progressive_photons: args.progressive_photons.then_some(true),
+            ppm_alpha: args.ppm_alpha,
             triangle_test: args.accel.backend.triangle_test(),
             integrator: args.integrator.map(Into::into),
             sampler: args.sampler.map(Into::into),

@@ -302,6 +302,28 @@ impl ChunkedTree {
         });
     }
 
+    /// Every point within squared distance `r2` of `q` (inclusive), in a
+    /// fixed order for a given tree and query (chunks nearest side first,
+    /// kiddo's traversal within each): the fixed-radius gather of
+    /// progressive photon mapping.
+    pub fn within(&self, q: &[f32; 3], r2: f32) -> Vec<Neighbour> {
+        let mut found: Vec<Neighbour> = Vec::new();
+        let mut reach = r2;
+        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
+            found.extend(
+                c.tree
+                    .within_unsorted::<SquaredEuclidean>(q, r2)
+                    .into_iter()
+                    .map(|nb| Neighbour {
+                        distance: nb.distance,
+                        item: c.offset + nb.item,
+                    }),
+            );
+            r2
+        });
+        found
+    }
+
     /// Up to `k` nearest points within squared distance `r2` of `q`, in no
     /// particular order.
     pub fn nearest_n_within(&self, q: &[f32; 3], r2: f32, k: NonZero<usize>) -> Vec<Neighbour> {

@@ -153,6 +153,10 @@ pub struct PhotonTracer<'a> {
     /// Photons emitted in total (`N` in the power normalisation).
     count: u64,
     seed: u64,
+    /// Fourth key of every photon's stream: 0 for the caustic map of a
+    /// render, `1 + s` for progressive photon mapping's map of sample index
+    /// `s` (see [`with_stream`](Self::with_stream)).
+    stream: u64,
     max_depth: u32,
     rules: PhotonRules,
     /// The water's medium (physically based rules only).
@@ -257,10 +261,20 @@ impl<'a> PhotonTracer<'a> {
             cdf,
             count,
             seed: scene.settings.seed,
+            stream: 0,
             max_depth: scene.settings.whitted_depth(),
             rules: PhotonRules::Whitted,
             water: None,
         }
+    }
+
+    /// The same emission with every photon `i` drawing from
+    /// `Rng::new(seed, Domain::Photon, i, stream)` instead of stream 0:
+    /// an independent map with the same Morton-stratified emission
+    /// (progressive photon mapping traces one per sample index).
+    pub fn with_stream(mut self, stream: u64) -> Self {
+        self.stream = stream;
+        self
     }
 
     /// Number of casters emission is restricted to (over all lights, distinct).
@@ -282,7 +296,7 @@ impl<'a> PhotonTracer<'a> {
         if self.emitters.is_empty() {
             return None;
         }
-        let mut rng = Rng::new(self.seed, Domain::Photon, index, 0);
+        let mut rng = Rng::new(self.seed, Domain::Photon, index, self.stream);
         let u = rng.f32();
         let which = self.cdf.partition_point(|&c| c <= u).min(self.emitters.len() - 1);
         let e = &self.emitters[which];

@@ -11,6 +11,13 @@
 //! else the maximum radius (the search disk actually covered): taking the
 //! farthest photon's distance when fewer than `k` exist would divide one
 //! lone photon by a tiny area, a firefly.
+//!
+//! With a fixed radius (`GatherParams::fixed_radius`, progressive photon
+//! mapping: Knaus & Zwicker 2011) every photon within `r` counts and `r` is
+//! that radius, whatever the photon density: the same cone-filtered sum
+//! over the same normalised disk, so that its expectation is the
+//! irradiance convolved with a kernel of fixed support `r`, the quantity
+//! whose bias Knaus & Zwicker's radius sequence drives to zero.
 
 use super::chunked::Neighbour;
 use super::map::{to_tree, PhotonMap, PhotonRecord};
@@ -28,6 +35,23 @@ pub struct GatherParams {
     pub max_radius: f32,
     /// Cone-filter constant `k_c ≥ 1`.
     pub cone_k: f32,
+    /// Gather every photon within this radius instead of the `k` nearest
+    /// (progressive photon mapping's `r_i`, `photon::progressive`); `k` and
+    /// `max_radius` are then unused, and a precomputed irradiance is not
+    /// looked up (it was made for another radius).
+    pub fixed_radius: Option<f32>,
+}
+
+impl GatherParams {
+    /// The k-nearest gather within `max_radius`.
+    pub fn k_nearest(k: NonZero<usize>, max_radius: f32, cone_k: f32) -> Self {
+        Self {
+            k,
+            max_radius,
+            cone_k,
+            fixed_radius: None,
+        }
+    }
 }
 
 /// Cone-filter weight of a photon at distance `d` in a disk of radius `r`.
@@ -78,16 +102,21 @@ impl PhotonMap {
         kernel: Kernel,
         weight: impl Fn(&PhotonRecord) -> Vec3A,
     ) -> Vec3A {
-        if self.is_empty() || !self.near_bounds(p, g.max_radius) {
+        let reach = g.fixed_radius.unwrap_or(g.max_radius);
+        if self.is_empty() || !self.near_bounds(p, reach) {
             return Vec3A::ZERO;
         }
-        let found = self
-            .tree
-            .nearest_n_within(&to_tree(&self.rotation, p), g.max_radius * g.max_radius, g.k);
+        let q = to_tree(&self.rotation, p);
+        let found = match g.fixed_radius {
+            Some(r) => self.tree.within(&q, r * r),
+            None => self.tree.nearest_n_within(&q, g.max_radius * g.max_radius, g.k),
+        };
         if found.is_empty() {
             return Vec3A::ZERO;
         }
-        let r2 = if found.len() >= g.k.get() {
+        let r2 = if let Some(r) = g.fixed_radius {
+            r * r
+        } else if found.len() >= g.k.get() {
             found.iter().fold(0.0f32, |m, nb| m.max(nb.distance))
         } else {
             g.max_radius * g.max_radius
@@ -132,14 +161,17 @@ impl PhotonMap {
     #[inline]
     pub fn caustic_irradiance_cached(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
         match &self.precomputed {
-            Some(pre) => pre.lookup(self, p, n, g, cache),
-            None => self.irradiance(p, n, g),
+            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, p, n, g, cache),
+            _ => self.irradiance(p, n, g),
         }
     }
 
     /// The direct estimate and the radius of the disk it divided by (0
     /// when nothing was found).
     pub(super) fn gather(&self, p: Vec3A, n: Vec3A, g: &GatherParams) -> (Vec3A, f32) {
+        if let Some(r) = g.fixed_radius {
+            return self.gather_within(p, n, r, g.cone_k);
+        }
         // Early out: no photon can lie within the radius of a point farther
         // than it from the map's bounds (most of an image, for caustics).
         if self.is_empty() || !self.near_bounds(p, g.max_radius) {
@@ -149,6 +181,28 @@ impl PhotonMap {
             .tree
             .nearest_n_within(&to_tree(&self.rotation, p), g.max_radius * g.max_radius, g.k);
         self.estimate(&found, n, g)
+    }
+
+    /// Every photon within the fixed radius `r` that arrived from `n`'s
+    /// side, cone-filtered and divided by the filter's integral over the
+    /// disk of radius `r` (0 when `r` is not positive).
+    fn gather_within(&self, p: Vec3A, n: Vec3A, r: f32, cone_k: f32) -> (Vec3A, f32) {
+        let r2 = r * r;
+        if self.is_empty() || r2.is_nan() || r2 <= 0.0 || !self.near_bounds(p, r) {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let found = self.tree.within(&to_tree(&self.rotation, p), r2);
+        if found.is_empty() {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let mut sum = Vec3A::ZERO;
+        for nb in &found {
+            let rec = self.records[nb.item as usize];
+            if rec.arrives_from_side_of(n) {
+                sum += rec.power() * cone_weight(nb.distance.sqrt(), r, cone_k);
+            }
+        }
+        (sum / (cone_normalisation(cone_k) * PI * r2), r)
     }
 
     /// The cone-filtered estimate from the gathered `found` photons.
@@ -240,11 +294,7 @@ mod tests {
             })
             .collect();
         let map = PhotonMap::from_photons(&photons);
-        let g = GatherParams {
-            k: NonZero::new(400).unwrap(),
-            max_radius: 0.6,
-            cone_k: 1.1,
-        };
+        let g = GatherParams::k_nearest(NonZero::new(400).unwrap(), 0.6, 1.1);
         let want = power / (side * side * side);
         let mut mean = Vec3A::ZERO;
         for i in 0..27 {
@@ -284,6 +334,7 @@ mod tests {
             k: NonZero::new(200).unwrap(),
             max_radius: 0.5,
             cone_k: 1.1,
+            fixed_radius: None,
         };
         let mut mean = Vec3A::ZERO;
         let queries = 50;
@@ -298,5 +349,34 @@ mod tests {
         assert_eq!(map.irradiance(Vec3A::ZERO, -Vec3A::Y, &g), Vec3A::ZERO);
         // Far away: nothing within the radius.
         assert_eq!(map.irradiance(Vec3A::new(0.0, 5.0, 0.0), Vec3A::Y, &g), Vec3A::ZERO);
+        // The fixed-radius gather of progressive photon mapping recovers it
+        // too, and counts exactly the photons within the radius.
+        let fixed = GatherParams {
+            fixed_radius: Some(0.3),
+            ..g
+        };
+        let mut mean = Vec3A::ZERO;
+        for i in 0..queries {
+            let p = Vec3A::new((i % 7) as f32 * 0.3 - 1.0, 0.0, (i / 7) as f32 * 0.25 - 0.9);
+            mean += map.irradiance(p, Vec3A::Y, &fixed) / queries as f32;
+        }
+        assert!(
+            (mean / e - Vec3A::ONE).abs().max_element() < 0.03,
+            "fixed radius: mean {mean} vs {e}"
+        );
+        assert_eq!(map.irradiance(Vec3A::ZERO, -Vec3A::Y, &fixed), Vec3A::ZERO);
+        let (_, r) = map.gather(Vec3A::ZERO, Vec3A::Y, &fixed);
+        assert_eq!(r, 0.3);
+        let q = Vec3A::new(0.1, 0.0, -0.2);
+        let inside = photons
+            .iter()
+            .filter(|p| (p.position - q).length_squared() <= 0.09)
+            .count();
+        let found = map.tree.within(&to_tree(&map.rotation, q), 0.09);
+        assert!(
+            inside.abs_diff(found.len()) <= 2,
+            "{inside} within, {} found",
+            found.len()
+        );
     }
 }

@@ -6,7 +6,10 @@
 //!
 //! - [`emit`]: emission restricted to the specular casters and tracing;
 //! - [`map`]: the compact photon records and kiddo's immutable k-d tree;
-//! - [`gather`]: the k-nearest cone-filter estimate.
+//! - [`gather`]: the k-nearest cone-filter estimate, or every photon
+//!   within a fixed radius;
+//! - [`progressive`]: progressive photon mapping's schedule (Knaus &
+//!   Zwicker 2011): one independent map per sample index and its radius.
 //!
 //! The pass is parallel (rayon) and deterministic: photon `i` draws from
 //! `Rng::new(seed, Domain::Photon, i, 0)` and the photons are concatenated
@@ -19,6 +22,7 @@ pub mod gather;
 pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
+pub mod progressive;
 
 pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
@@ -81,12 +85,48 @@ pub struct PhotonStats {
     pub precomputed_sites: u64,
     /// Wall time of the precomputation (estimates and the sites' tree).
     pub precompute_time: Duration,
-    /// Bytes held by the map.
+    /// Bytes held by the map (progressive: the largest of the maps, of
+    /// which one lives at a time).
     pub memory_bytes: usize,
+    /// Maps traced: 1, or progressive photon mapping's one per sample index
+    /// rendered (the other fields are then totals over the maps).
+    pub maps: u64,
+}
+
+impl PhotonStats {
+    /// Adds another map's statistics to these totals (progressive photon
+    /// mapping: times and counts add up, memory is the largest map's).
+    pub fn add(&mut self, other: &PhotonStats) {
+        self.emitted += other.emitted;
+        self.stored += other.stored;
+        self.rays += other.rays;
+        self.trace_time += other.trace_time;
+        self.build_time += other.build_time;
+        self.precomputed_sites += other.precomputed_sites;
+        self.precompute_time += other.precompute_time;
+        self.memory_bytes = self.memory_bytes.max(other.memory_bytes);
+        self.maps += other.maps;
+    }
 }
 
 impl fmt::Display for PhotonStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.maps > 1 {
+            let total = self.trace_time + self.build_time + self.precompute_time;
+            return write!(
+                f,
+                "photon passes (progressive): {} maps, {:.3} s in total ({:.3} s traced, {:.3} s k-d tree builds), \
+                 {} emitted, {} stored, {} rays, {:.1} MiB for the largest map",
+                self.maps,
+                total.as_secs_f64(),
+                self.trace_time.as_secs_f64(),
+                self.build_time.as_secs_f64(),
+                self.emitted,
+                self.stored,
+                self.rays,
+                self.memory_bytes as f64 / (1024.0 * 1024.0),
+            );
+        }
         write!(
             f,
             "photon pass: {} emitted, {} stored{}, {} rays, traced in {:.3} s, k-d tree built in {:.3} s, \
@@ -135,7 +175,7 @@ pub fn photon_pass_with(
     keep_positions: bool,
     rules: PhotonRules,
 ) -> (PhotonMap, PhotonStats) {
-    let traced = trace_photons_with(scene, accel, count, precompute.is_some(), rules);
+    let traced = trace_photons_with(scene, accel, count, precompute.is_some(), rules, 0);
     build_photon_map(traced, precompute, keep_positions)
 }
 
@@ -171,19 +211,23 @@ pub struct TracedPhotons {
 /// (deterministic for any thread count), collecting the candidate
 /// irradiance sites when `with_sites`.
 pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: bool) -> TracedPhotons {
-    trace_photons_with(scene, accel, count, with_sites, PhotonRules::Whitted)
+    trace_photons_with(scene, accel, count, with_sites, PhotonRules::Whitted, 0)
 }
 
-/// [`trace_photons`] under the given scattering rules.
+/// [`trace_photons`] under the given scattering rules, with photon `i`
+/// drawing from `Rng::new(seed, Domain::Photon, i, stream)`
+/// ([`PhotonTracer::with_stream`]; stream 0 is [`trace_photons`]' map):
+/// progressive photon mapping's independent maps ([`progressive`]).
 pub fn trace_photons_with(
     scene: &Scene,
     accel: &dyn Accel,
     count: u64,
     with_sites: bool,
     rules: PhotonRules,
+    stream: u64,
 ) -> TracedPhotons {
     let start = Instant::now();
-    let tracer = PhotonTracer::with_rules(scene, accel, count, rules);
+    let tracer = PhotonTracer::with_rules(scene, accel, count, rules).with_stream(stream);
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
     // arrive), they never move while growing; growth by doubling copied
@@ -328,6 +372,7 @@ pub fn build_photon_map(
         precomputed_sites,
         precompute_time: precompute_start.elapsed(),
         memory_bytes: map.memory_bytes(),
+        maps: 1,
     };
     (map, stats)
 }

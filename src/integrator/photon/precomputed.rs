@@ -292,6 +292,7 @@ mod tests {
             k: NonZero::new(8).unwrap(),
             max_radius: 1.0,
             cone_k: 1.1,
+            fixed_radius: None,
         };
         let bound = |max_sites| Precompute { gather: g, max_sites };
         let thin = bound(300).thin(sites.clone());
@@ -347,6 +348,7 @@ mod tests {
             k: NonZero::new(64).unwrap(),
             max_radius: 0.15,
             cone_k: 1.1,
+            fixed_radius: None,
         };
         let mut map = PhotonMap::from_photons(&photons);
         map.precompute_irradiance(sites, &g);
@@ -424,6 +426,7 @@ mod tests {
             k: NonZero::new(64).unwrap(),
             max_radius: 0.2,
             cone_k: 1.1,
+            fixed_radius: None,
         };
         let mut map = PhotonMap::from_photons(&photons);
         let direct = |m: &PhotonMap, p: Vec3A, n: Vec3A| m.irradiance(p, n, &g);

@@ -219,11 +219,29 @@ impl Ctx<'_> {
                 x
             }
         };
+        let alpha = match &p.alpha {
+            None => d.alpha,
+            Some(a) => {
+                let x = self.number(a, "alpha")?;
+                if !(x > 0.0 && x < 1.0) {
+                    return Err(self.invalid(
+                        a.span(),
+                        format!(
+                            "`alpha` = {x} must be in (0, 1) (the fraction of photons each progressive pass keeps; \
+                             Knaus & Zwicker suggest 2/3)"
+                        ),
+                    ));
+                }
+                x
+            }
+        };
         Ok(PhotonSettings {
             count,
             k,
             max_radius,
             cone_k,
+            progressive: p.progressive.unwrap_or(d.progressive),
+            alpha,
             gather: match p.gather {
                 None => d.gather,
                 Some(GatherName::Precomputed) => GatherMode::Precomputed,
