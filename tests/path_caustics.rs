@@ -129,7 +129,10 @@ fn map_and_path_caustics_converge_to_the_same_image() {
     let caustic_ratio = region_mean(&q, width, caustic) / region_mean(&p, width, caustic);
     eprintln!("progressive / path: image {ratio:.4}, caustic {caustic_ratio:.4}");
     assert!((ratio - 1.0).abs() < 0.03, "progressive image mean ratio {ratio}");
-    assert!((caustic_ratio - 1.0).abs() < 0.06, "progressive caustic mean ratio {caustic_ratio}");
+    assert!(
+        (caustic_ratio - 1.0).abs() < 0.06,
+        "progressive caustic mean ratio {caustic_ratio}"
+    );
 }
 
 /// The physically based photons carry the power the casters receive:
