@@ -11,7 +11,19 @@ Usage:
   python3 -m pip install mitsuba numpy      # once (a virtual environment is fine)
   scripts/validate-mitsuba.py [--spp-caustic N] [--spp-mitsuba N] [--size 256]
                               [--out DIR] [--scenes cornell,specular,materials]
+                              [--caustics path|map|path,map] [--photons N]
+                              [--region X0,Y0,X1,Y1] [--halves]
                               [--equal-time SECONDS,...]
+
+--caustics map renders caustic's images with photon-mapped caustics (L S+ D
+from a photon map of --photons photons, the rest path traced) instead of
+pure path tracing; Mitsuba stays a pure path tracer. A list (path,map) gives
+one row per mode against the same Mitsuba image. --region adds the ratio of
+the means over a pixel rectangle (x0 ≤ x < x1, y0 ≤ y < y1, y down, e.g.
+around a caustic). --halves renders every image as two halves of its samples
+with different seeds and averages them; the halves' differences then give
+the standard error of each mean ratio and the relMSE that the two images'
+noise alone would give (the rest is bias, e.g. the photon map's blur).
 
 With --equal-time SPP,SPP,..., both renderers render the Cornell box at those
 sample counts instead, and the script prints render time and relMSE against a
@@ -203,12 +215,15 @@ def caustic_binary(given):
     return os.path.join(ROOT, "target", "release", "caustic")
 
 
-def render_caustic(binary, toml_text, out_dir, name, spp=None, seconds=None, seed=1):
+def render_caustic(binary, toml_text, out_dir, name, spp=None, seconds=None, seed=1, caustics="path",
+                   photons=None):
     scene = os.path.join(out_dir, f"{name}.toml")
     with open(scene, "w") as f:
         f.write(toml_text)
     exr = os.path.join(out_dir, f"{name}-caustic.exr")
-    cmd = [binary, "render", scene, "--exr", exr, "--quiet", "--seed", str(seed)]
+    cmd = [binary, "render", scene, "--exr", exr, "--quiet", "--seed", str(seed), "--caustics", caustics]
+    if caustics == "map" and photons is not None:
+        cmd += ["--photons", str(photons)]
     if spp is not None:
         cmd += ["--spp", str(spp)]
     start = time.time()
@@ -233,6 +248,40 @@ def mean_ratio(x, ref):
     return [float(x[:, :, c].mean() / ref[:, :, c].mean()) for c in range(3)]
 
 
+def halves_render(render, spp, seeds, halves):
+    """`render(spp, seed)` once, or (with `halves`) as two renders of half
+    the samples with seeds `seeds[0]`, `seeds[1]`: (image, seconds, the two
+    halves or None)."""
+    if not halves:
+        img, wall = render(spp, seeds[0])
+        return img, wall, None
+    a, ta = render(spp // 2, seeds[0])
+    b, tb = render(spp - spp // 2, seeds[1])
+    return 0.5 * (a + b), ta + tb, (a, b)
+
+
+def mean_ratio_error(ours, theirs, window):
+    """Standard error of each channel's mean ratio over `window` (numpy
+    index), from the two halves of each image: the variance of a pixel of
+    the averaged image is (a − b)² / 4, pixels taken as independent."""
+    out = []
+    for c in range(3):
+        rel2 = 0.0
+        for a, b in (ours, theirs):
+            m = 0.5 * (a[window][..., c] + b[window][..., c])
+            var_mean = float(np.sum((a[window][..., c] - b[window][..., c]) ** 2) / 4.0) / m.size ** 2
+            rel2 += var_mean / float(m.mean()) ** 2
+        out.append(math.sqrt(rel2))
+    return out
+
+
+def noise_relmse(ours, theirs, ref):
+    """The relMSE that the two images' noise alone gives (its expectation,
+    estimated from the halves of each image): mean((σ²_x + σ²_ref) / (ref² + ε))."""
+    var = sum((a - b) ** 2 / 4.0 for a, b in (ours, theirs))
+    return float(np.mean(var / (ref ** 2 + EPSILON)))
+
+
 def save_exr(path, img):
     mi.Bitmap(img.astype(np.float32)).write(path)
 
@@ -248,6 +297,12 @@ def main():
                     help="comma-separated sample counts: time against error on the Cornell box")
     ap.add_argument("--reference", help="converged Mitsuba EXR of the Cornell box for --equal-time")
     ap.add_argument("--plot", help="PNG plot of the --equal-time curves (needs matplotlib)")
+    ap.add_argument("--caustics", default="path",
+                    help="caustic's caustics: path (pure path tracing), map (photon map), or a list: path,map")
+    ap.add_argument("--photons", type=int, default=2000000, help="photons emitted with --caustics map")
+    ap.add_argument("--region", help="x0,y0,x1,y1: also the ratio of the means over these pixels (y down)")
+    ap.add_argument("--halves", action="store_true",
+                    help="two half renders per image: standard errors of the mean ratios and the noise's relMSE")
     ap.add_argument("--json", help="also write the results as JSON")
     ap.add_argument("--binary", help="the caustic binary to run (default: built with cargo)")
     args = ap.parse_args()
@@ -257,18 +312,60 @@ def main():
     if args.equal_time:
         results = equal_time(binary, args)
     else:
-        print(f"{'scene':<10} {'caustic spp':>11} {'s':>7} {'mitsuba spp':>11} {'s':>7} {'relMSE':>10}  mean ratio R G B")
+        modes = args.caustics.split(",")
+        if any(m not in ("path", "map") for m in modes):
+            sys.exit(f"--caustics: path, map or path,map, not {args.caustics}")
+        window = None
+        if args.region:
+            x0, y0, x1, y1 = (int(v) for v in args.region.split(","))
+            window = (slice(y0, y1), slice(x0, x1))
+        print(f"caustics: {args.caustics}" + (f", {args.photons} photons" if "map" in modes else "")
+              + (f"; region x {x0}..{x1}, y {y0}..{y1}" if window else "")
+              + ("; ± standard error from two halves of each image" if args.halves else ""))
+        header = f"{'scene':<10} {'caustics':>8} {'caustic spp':>11} {'s':>7} {'mitsuba spp':>11} {'s':>7} {'relMSE':>10}"
+        if args.halves:
+            header += f" {'noise':>10}"
+        header += "  mean ratio R G B"
+        if window:
+            header += "  region mean ratio R G B"
+        print(header)
         for name in args.scenes.split(","):
             d = SCENES[name](args.size)
-            ours, t_ours = render_caustic(binary, caustic_scene(d, args.spp_caustic), args.out, name)
-            theirs, t_theirs = render_mitsuba(d, args.spp_mitsuba)
+            theirs, t_theirs, theirs_h = halves_render(lambda spp, seed: render_mitsuba(d, spp, seed=seed),
+                                                       args.spp_mitsuba, (0, 1), args.halves)
             save_exr(os.path.join(args.out, f"{name}-mitsuba.exr"), theirs)
-            e, r = relmse(ours, theirs), mean_ratio(ours, theirs)
-            print(f"{name:<10} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} {t_theirs:>7.1f} "
-                  f"{e:>10.3e}  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}", flush=True)
-            results.append({"scene": name, "caustic_spp": args.spp_caustic, "caustic_seconds": t_ours,
-                            "mitsuba_spp": args.spp_mitsuba, "mitsuba_seconds": t_theirs,
-                            "relmse": e, "mean_ratio": r})
+            for mode in modes:
+                def render(spp, seed):
+                    return render_caustic(binary, caustic_scene(d, spp), args.out, name, seed=seed,
+                                          caustics=mode, photons=args.photons)
+                ours, t_ours, ours_h = halves_render(render, args.spp_caustic, (1, 2), args.halves)
+                save_exr(os.path.join(args.out, f"{name}-caustic-{mode}.exr"), ours)
+                e, r = relmse(ours, theirs), mean_ratio(ours, theirs)
+                row = {"scene": name, "caustics": mode, "photons": args.photons if mode == "map" else None,
+                       "caustic_spp": args.spp_caustic, "caustic_seconds": t_ours,
+                       "mitsuba_spp": args.spp_mitsuba, "mitsuba_seconds": t_theirs,
+                       "relmse": e, "mean_ratio": r}
+                line = (f"{name:<10} {mode:>8} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} "
+                        f"{t_theirs:>7.1f} {e:>10.3e}")
+                whole = (slice(None), slice(None))
+                if args.halves:
+                    row["noise_relmse"] = noise_relmse(ours_h, theirs_h, theirs)
+                    row["mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, whole)
+                    line += f" {row['noise_relmse']:>10.3e}  " + " ".join(
+                        f"{v:.4f}±{s:.4f}" for v, s in zip(r, row["mean_ratio_error"]))
+                else:
+                    line += f"  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}"
+                if window:
+                    rr = mean_ratio(ours[window], theirs[window])
+                    row["region"] = [x0, y0, x1, y1]
+                    row["region_mean_ratio"] = rr
+                    if args.halves:
+                        row["region_mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, window)
+                        line += "  " + " ".join(f"{v:.4f}±{s:.4f}" for v, s in zip(rr, row["region_mean_ratio_error"]))
+                    else:
+                        line += f"  {rr[0]:.4f} {rr[1]:.4f} {rr[2]:.4f}"
+                print(line, flush=True)
+                results.append(row)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=2)
