@@ -401,3 +401,38 @@ fn photon_files_are_refused_for_the_path_integrators_maps() {
     );
     assert!(!png.exists());
 }
+
+/// A render stopped after some passes and continued from its accumulation
+/// (what a checkpoint holds) ends with the uninterrupted image bit for bit,
+/// map and water included: the maps are re-traced identically.
+#[test]
+fn map_caustics_resume_bit_for_bit() {
+    use caustic::film::Accumulation;
+    use caustic::integrator::{render_with_control, RenderControl};
+    for mut s in [scene(GLASS), scene(&water(0.05, 0.15, false, "caustics = \"map\""))] {
+        s.settings.spp = 12;
+        s.settings.photons.count = 40_000;
+        let accel = accel::build(&s, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
+        let plan = RenderPlan::new(&s);
+        let start = || Accumulation::new(plan.width, plan.height);
+        let full = render_with_control(
+            &s,
+            accel.as_ref(),
+            &plan,
+            start(),
+            &RenderControl::to_completion(&|_, _| {}),
+        );
+        let mut first = RenderControl::to_completion(&|_, _| {});
+        first.sample_limit = Some(4);
+        let part = render_with_control(&s, accel.as_ref(), &plan, start(), &first);
+        assert!(part.accumulation.samples_taken() < full.accumulation.samples_taken());
+        let rest = render_with_control(
+            &s,
+            accel.as_ref(),
+            &plan,
+            part.accumulation,
+            &RenderControl::to_completion(&|_, _| {}),
+        );
+        assert_eq!(rest.accumulation, full.accumulation);
+    }
+}
