@@ -350,22 +350,37 @@ fn scene_setting_denoise_turns_it_on() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("s.toml");
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/shadow.toml")).unwrap();
-    let text = text.replacen("[render]", "[render]\ndenoise = true", 1);
+    let text = text.replacen("[render]", "[render]\ndenoise = true\ndenoise_quality = \"fast\"", 1);
     assert!(text.contains("denoise = true"));
     std::fs::write(&scene, text).unwrap();
     let out = dir.path().join("s.png");
-    let o = caustic(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("denoised:"));
+    let render = |extra: &[&str]| {
+        let args = [
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            extra,
+        ]
+        .concat();
+        let o = caustic(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    // The scene's quality, then the command line's over it.
+    let summary = render(&[]);
+    assert!(
+        summary.contains("denoised: Open Image Denoise") && summary.contains("(fast quality"),
+        "{summary}"
+    );
+    let summary = render(&["--denoise-quality", "high"]);
+    assert!(summary.contains("(high quality"), "{summary}");
 }
 
 #[cfg(not(feature = "denoise"))]
@@ -393,6 +408,21 @@ fn a_wrongly_typed_denoise_setting_names_its_place() {
     let o = caustic(&["info", scene.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("s.toml:6:"), "{}", stderr(&o));
+    // An unknown quality names its place and the values it could take.
+    std::fs::write(
+        &scene,
+        text.replacen("[render]", "[render]\ndenoise_quality = \"ultra\"", 1),
+    )
+    .unwrap();
+    let o = caustic(&["info", scene.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("s.toml:6:") && e.contains("ultra") && e.contains("fast"),
+        "{e}"
+    );
+    let o = caustic(&["render", scene.to_str().unwrap(), "--denoise-quality", "ultra"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
 /// `caustic converge --denoise` against a small reference: a denoised copy

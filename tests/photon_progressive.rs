@@ -352,6 +352,7 @@ fn shards(base: &RenderRequest, count: u32, mode: ShardMode, dir: &Path) -> Accu
         exr: None,
         partial: None,
         denoise: false,
+        ..Default::default()
     })
     .unwrap()
     .accumulation

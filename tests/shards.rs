@@ -64,6 +64,7 @@ fn merge(partials: &[PathBuf], png: Option<&Path>, partial: Option<&Path>) -> Re
         exr: None,
         partial: partial.map(Path::to_path_buf),
         denoise: false,
+        ..Default::default()
     })
 }
 
@@ -89,6 +90,7 @@ fn tiles_merge_is_bit_identical_for_any_shard_and_thread_count() {
             exr: Some(exr.clone()),
             partial: None,
             denoise: false,
+            ..Default::default()
         })
         .unwrap();
         assert!(report.accumulation == reference, "{count} shards, {threads} threads");

@@ -16,14 +16,40 @@ use crate::math::Vec3;
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
-/// Quality of the filter: OIDN's `high` for final images, `balanced` (about
-/// twice as fast) for the viewer's previews.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Quality of the filter (OIDN's filter quality): `high` for final images,
+/// `fast` trades detail for about half the time (docs/denoise.md has their
+/// measured cost and error).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DenoiseQuality {
-    /// OIDN's highest quality.
+    /// OIDN's highest quality (the default).
+    #[default]
     High,
-    /// Faster, for interactive previews.
+    /// OIDN's balanced filter (on its CPU device the same image and time
+    /// as `High`, measured in docs/benchmarks.md).
     Balanced,
+    /// OIDN's fastest filter: about half the time of `High`; the viewer's.
+    Fast,
+}
+
+impl DenoiseQuality {
+    /// The name used on the command line and in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::High => "high",
+            Self::Balanced => "balanced",
+            Self::Fast => "fast",
+        }
+    }
+
+    /// Measured CPU seconds of the filter per million pixels, rounded up
+    /// (high and balanced: 2.9 s at 1920×1080, 3.5 s at 256×256; fast:
+    /// 1.7 s at 1920×1080): what a time budget keeps back.
+    pub fn cpu_seconds_per_megapixel(self) -> f64 {
+        match self {
+            Self::High | Self::Balanced => 4.0,
+            Self::Fast => 2.0,
+        }
+    }
 }
 
 /// The guides of the filter: per-pixel albedo in [0, 1] and unit shading
@@ -44,6 +70,8 @@ pub struct DenoiseStats {
     /// Growth of the process's peak resident memory while denoising (`None`
     /// where the operating system does not report it).
     pub peak_memory: Option<u64>,
+    /// The filter's quality.
+    pub quality: DenoiseQuality,
 }
 
 /// Why an image could not be denoised.
@@ -131,6 +159,7 @@ pub fn denoise(
         DenoiseStats {
             time: begin.elapsed(),
             peak_memory,
+            quality,
         },
     ))
 }
@@ -143,14 +172,39 @@ fn run(
     guides: Option<Guides>,
     quality: DenoiseQuality,
 ) -> Result<Vec<f32>, DenoiseError> {
+    use std::sync::{Mutex, PoisonError};
+    // One CPU device for the process: creating it costs about as much as
+    // filtering 256×256 pixels, which the viewer and `caustic converge`
+    // would otherwise pay at every image. A caller holds it while filtering
+    // (OIDN devices are not to be used by two threads at once).
+    static DEVICE: Mutex<Option<oidn::Device>> = Mutex::new(None);
     let fail = |e: oidn::Error| DenoiseError::Oidn(format!("{}: {}", e.kind().as_str(), e.message()));
-    let device = oidn::Device::cpu().map_err(fail)?;
-    let mut filter = oidn::RayTracing::try_new(&device).map_err(fail)?;
+    let mut cached = DEVICE.lock().unwrap_or_else(PoisonError::into_inner);
+    let device = match cached.take() {
+        Some(device) => device,
+        None => oidn::Device::cpu().map_err(fail)?,
+    };
+    let output = filter_with(&device, input, width, height, guides, quality).map_err(fail);
+    *cached = Some(device);
+    output
+}
+
+#[cfg(feature = "denoise")]
+fn filter_with(
+    device: &oidn::Device,
+    input: &[f32],
+    width: u32,
+    height: u32,
+    guides: Option<Guides>,
+    quality: DenoiseQuality,
+) -> Result<Vec<f32>, oidn::Error> {
+    let mut filter = oidn::RayTracing::try_new(device)?;
     filter
         .hdr(true)
         .filter_quality(match quality {
             DenoiseQuality::High => oidn::Quality::High,
             DenoiseQuality::Balanced => oidn::Quality::Balanced,
+            DenoiseQuality::Fast => oidn::Quality::Fast,
         })
         .image_dimensions(width as usize, height as usize);
     let aux = guides.map(|g| {
@@ -163,7 +217,7 @@ fn run(
         filter.albedo_normal(albedo, normal).clean_aux(true);
     }
     let mut output = vec![0.0f32; input.len()];
-    filter.filter(input, &mut output).map_err(fail)?;
+    filter.filter(input, &mut output)?;
     Ok(output)
 }
 
@@ -213,20 +267,27 @@ mod tests {
                 .sum::<f32>()
                 / a.pixels.len() as f32
         };
-        for guides in [
-            None,
-            Some(Guides {
-                albedo: &albedo,
-                normal: &normal,
-            }),
+        let guided = Some(Guides {
+            albedo: &albedo,
+            normal: &normal,
+        });
+        for (guides, quality) in [
+            (None, DenoiseQuality::High),
+            (guided, DenoiseQuality::High),
+            (guided, DenoiseQuality::Balanced),
+            (guided, DenoiseQuality::Fast),
         ] {
-            let (out, stats) = denoise(&noisy, guides, DenoiseQuality::High).unwrap();
+            let (out, stats) = denoise(&noisy, guides, quality).unwrap();
+            assert_eq!(stats.quality, quality);
+            // The process's one device gives the same image again.
+            let (again, _) = denoise(&noisy, guides, quality).unwrap();
+            assert_eq!(out.pixels, again.pixels, "{quality:?}");
             assert_eq!((out.width, out.height), (w, h));
             assert!(out.pixels.iter().all(|p| p.is_finite()));
             let (before, after) = (mse(&noisy), mse(&out));
             assert!(
                 after < before / 10.0,
-                "MSE {before} → {after} (guides: {})",
+                "MSE {before} → {after} (guides: {}, {quality:?})",
                 guides.is_some()
             );
             assert!(stats.time > Duration::ZERO);

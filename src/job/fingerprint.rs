@@ -74,13 +74,14 @@ fn fingerprint_of(
     let settings = RenderSettings {
         output: crate::film::OutputSettings::default(),
         denoise: false,
+        denoise_quality: Default::default(),
         ..settings.clone()
     };
-    // Denoising changes no sample: its field (the last) is left out of the
-    // text, which stays that of the settings before it existed (older
-    // checkpoints still resume).
+    // Denoising changes no sample: its fields (the last two) are left out
+    // of the text, which stays that of the settings before they existed
+    // (older checkpoints still resume).
     let text = format!("{settings:?}");
-    let text = match text.strip_suffix(", denoise: false }") {
+    let text = match text.strip_suffix(", denoise: false, denoise_quality: High }") {
         Some(head) => format!("{head} }}"),
         None => text,
     };
@@ -159,11 +160,12 @@ mod tests {
         s.settings.output.exposure = 2.0;
         s.settings.output.tone_map = crate::film::ToneMap::Clamp;
         s.settings.denoise = true;
+        s.settings.denoise_quality = crate::film::denoise::DenoiseQuality::Fast;
         assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
-        // The denoise field is the settings' last, which the hashed text
-        // leaves out (the text of the settings before it existed).
+        // The denoise fields are the settings' last, which the hashed text
+        // leaves out (the text of the settings before they existed).
         let text = format!("{:?}", RenderSettings::default());
-        assert!(text.ends_with(", denoise: false }"), "{text}");
+        assert!(text.ends_with(", denoise: false, denoise_quality: High }"), "{text}");
         // Everything else does.
         let mut s = scene();
         s.settings.seed += 1;

@@ -31,6 +31,8 @@ pub struct MergeRequest {
     pub partial: Option<PathBuf>,
     /// Denoise the PNG and the EXR's main layer (the partial stays raw).
     pub denoise: bool,
+    /// The denoising filter's quality.
+    pub denoise_quality: crate::film::denoise::DenoiseQuality,
 }
 
 /// What a merge did.
@@ -195,7 +197,7 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
     let mut written = Vec::new();
     let raw = merged.to_film();
     let (film_image, noisy, denoise) = if request.denoise && (request.png.is_some() || request.exr.is_some()) {
-        let (image, stats) = super::denoise_accumulation(&raw, &merged, crate::film::denoise::DenoiseQuality::High)?;
+        let (image, stats) = super::denoise_accumulation(&raw, &merged, request.denoise_quality)?;
         (image, Some(raw), Some(stats))
     } else {
         (raw, None, None)

@@ -68,6 +68,8 @@ pub struct Overrides {
     pub adaptive_goal: Option<crate::scene::AdaptiveGoal>,
     /// Denoise the final image (Open Image Denoise).
     pub denoise: Option<bool>,
+    /// The denoising filter's quality.
+    pub denoise_quality: Option<DenoiseQuality>,
     /// How the path integrator finds caustics.
     pub caustics: Option<crate::scene::CausticsMode>,
 }
@@ -129,6 +131,9 @@ impl Overrides {
         }
         if let Some(d) = self.denoise {
             s.denoise = d;
+        }
+        if let Some(q) = self.denoise_quality {
+            s.denoise_quality = q;
         }
         if let Some(c) = self.caustics {
             s.photons.caustics = c;
@@ -555,7 +560,7 @@ impl RenderJob {
             // The denoiser's time is kept within the budget.
             deadline: self.time_limit.map(|t| {
                 let reserve = match st.denoise {
-                    true => denoise_reserve(st.width, st.height, t),
+                    true => denoise_reserve(st.width, st.height, st.denoise_quality, t),
                     false => Duration::ZERO,
                 };
                 Instant::now() + t.saturating_sub(reserve)
@@ -574,7 +579,7 @@ impl RenderJob {
         }
         // The final outputs are denoised; checkpoints and partials never.
         let (noisy, denoise_stats) = if denoising {
-            let (image, stats) = denoise_accumulation(&output.film, &output.accumulation, DenoiseQuality::High)?;
+            let (image, stats) = denoise_accumulation(&output.film, &output.accumulation, st.denoise_quality)?;
             (Some(std::mem::replace(&mut output.film, image)), Some(stats))
         } else {
             (None, None)
@@ -638,19 +643,15 @@ pub fn denoise_accumulation(
 }
 
 /// Time kept from a render's budget for denoising its image: OIDN's CPU
-/// filter at high quality takes about [`DENOISE_SECONDS_PER_MEGAPIXEL`]
-/// per million pixels per core, after about [`DENOISE_SETUP_SECONDS`] to
-/// set up; at most a quarter of the budget.
-fn denoise_reserve(width: u32, height: u32, budget: Duration) -> Duration {
+/// filter takes about [`DenoiseQuality::cpu_seconds_per_megapixel`] per
+/// million pixels per core, after about [`DENOISE_SETUP_SECONDS`] to set
+/// up; at most a quarter of the budget.
+fn denoise_reserve(width: u32, height: u32, quality: DenoiseQuality, budget: Duration) -> Duration {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
     let megapixels = width as f64 * height as f64 / 1.0e6;
-    let seconds = DENOISE_SETUP_SECONDS + megapixels * DENOISE_SECONDS_PER_MEGAPIXEL / cores;
+    let seconds = DENOISE_SETUP_SECONDS + megapixels * quality.cpu_seconds_per_megapixel() / cores;
     Duration::from_secs_f64(seconds).min(budget / 4)
 }
-
-/// Measured CPU cost of the high-quality filter per million pixels (2.9 s
-/// at 1920×1080, 3.5 s at 256×256), rounded up (see `denoise_reserve`).
-pub const DENOISE_SECONDS_PER_MEGAPIXEL: f64 = 4.0;
 
 /// Device and filter creation before the first pixel (see `denoise_reserve`).
 pub const DENOISE_SETUP_SECONDS: f64 = 0.15;

@@ -220,6 +220,20 @@ pub struct RenderDesc {
     pub adaptive_goal: Option<AdaptiveGoalName>,
     /// Denoise the final image (Open Image Denoise).
     pub denoise: Option<bool>,
+    /// The denoising filter's quality.
+    pub denoise_quality: Option<DenoiseQualityName>,
+}
+
+/// Denoising filter quality names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DenoiseQualityName {
+    /// `"high"`.
+    High,
+    /// `"balanced"`.
+    Balanced,
+    /// `"fast"`.
+    Fast,
 }
 
 /// Adaptive goal names.

@@ -10,6 +10,7 @@ pub mod material;
 pub mod medium;
 pub mod metals;
 
+use crate::film::denoise::DenoiseQuality;
 pub use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::{Hit, TriangleTest};
 use crate::math::{Aabb, Ray, SamplerKind, Transform, Vec3A};
@@ -136,8 +137,11 @@ pub struct RenderSettings {
     pub medium: Option<Medium>,
     /// Denoise the final image with Open Image Denoise (`[render] denoise`,
     /// `--denoise`): what is written, not what is sampled (not in the
-    /// fingerprint). Kept last: the fingerprint relies on it.
+    /// fingerprint). Kept last but one: the fingerprint relies on it.
     pub denoise: bool,
+    /// The denoising filter's quality (`[render] denoise_quality`,
+    /// `--denoise-quality`; not in the fingerprint). Kept last.
+    pub denoise_quality: DenoiseQuality,
 }
 
 /// Photon map settings (the `[photons]` table). The photon pass runs only
@@ -233,6 +237,7 @@ impl Default for RenderSettings {
             photons: PhotonSettings::default(),
             medium: None,
             denoise: false,
+            denoise_quality: DenoiseQuality::High,
         }
     }
 }

@@ -462,13 +462,13 @@ fn run_pass(
     Some((frame, out.accumulation))
 }
 
-/// Denoises `frame` (balanced quality: a preview) and sends the result.
+/// Denoises `frame` (fast quality: a preview) and sends the result.
 fn denoise_frame(frame: &Frame, send: &dyn Fn(WorkerEvent)) {
     let guides = frame
         .guides
         .as_deref()
         .map(|(albedo, normal)| Guides { albedo, normal });
-    match denoise::denoise(&frame.film, guides, DenoiseQuality::Balanced) {
+    match denoise::denoise(&frame.film, guides, DenoiseQuality::Fast) {
         Ok((film, stats)) => send(WorkerEvent::Denoised {
             generation: frame.generation,
             pass: frame.pass,

@@ -245,7 +245,7 @@ impl Renderer<'_> {
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         if curve.denoise {
             // The first filter loads OIDN's device module.
-            let _ = denoised(&out);
+            let _ = denoised(&out, self.scene.settings.denoise_quality);
         }
     }
 
@@ -261,7 +261,7 @@ impl Renderer<'_> {
         let start = Instant::now();
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         let film = match curve.denoise {
-            true => denoised(&out)?,
+            true => denoised(&out, self.scene.settings.denoise_quality)?,
             false => out.film.clone(),
         };
         let photon_seconds_of = |o: &render::RenderOutput| {
@@ -283,7 +283,7 @@ impl Renderer<'_> {
             let again = Instant::now();
             let repeat = render::render(&self.scene, accel, &plan, &|_, _| {});
             if curve.denoise {
-                denoised(&repeat)?;
+                denoised(&repeat, self.scene.settings.denoise_quality)?;
             }
             let s = again.elapsed().as_secs_f64();
             if s < seconds {
@@ -308,8 +308,9 @@ impl Renderer<'_> {
 }
 
 /// The render's image denoised at high quality, guided by its albedo and normal.
-fn denoised(out: &render::RenderOutput) -> Result<Film, ConvergeError> {
-    let (film, _) = crate::job::denoise_accumulation(&out.film, &out.accumulation, DenoiseQuality::High)?;
+/// The image of `out` through the scene's denoising filter quality.
+fn denoised(out: &render::RenderOutput, quality: DenoiseQuality) -> Result<Film, ConvergeError> {
+    let (film, _) = crate::job::denoise_accumulation(&out.film, &out.accumulation, quality)?;
     Ok(film)
 }
 

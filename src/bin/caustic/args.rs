@@ -189,6 +189,9 @@ pub struct RenderArgs {
     /// EXR as noisy.R/G/B; checkpoints stay raw). Also `[render] denoise = true`.
     #[arg(long)]
     pub denoise: bool,
+    /// The denoising filter's quality (default high). Also `[render] denoise_quality`.
+    #[arg(long, value_enum)]
+    pub denoise_quality: Option<DenoiseQualityArg>,
     /// Render progressively until this many seconds have passed, then write
     /// the image so far (with --noise-threshold: whichever comes first).
     #[arg(long)]
@@ -341,6 +344,9 @@ pub struct MergeArgs {
     /// image stays in the EXR as noisy.R/G/B).
     #[arg(long)]
     pub denoise: bool,
+    /// The denoising filter's quality.
+    #[arg(long, value_enum, default_value = "high")]
+    pub denoise_quality: DenoiseQualityArg,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -400,6 +406,27 @@ impl From<CausticsArg> for caustic::scene::CausticsMode {
         match c {
             CausticsArg::Path => Self::Path,
             CausticsArg::Map => Self::Map,
+        }
+    }
+}
+
+/// The denoising filter's quality.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DenoiseQualityArg {
+    /// OIDN's highest quality (final images).
+    High,
+    /// OIDN's balanced filter (on the CPU the same as high).
+    Balanced,
+    /// OIDN's fastest filter, about half the time of high.
+    Fast,
+}
+
+impl From<DenoiseQualityArg> for caustic::film::denoise::DenoiseQuality {
+    fn from(q: DenoiseQualityArg) -> Self {
+        match q {
+            DenoiseQualityArg::High => Self::High,
+            DenoiseQualityArg::Balanced => Self::Balanced,
+            DenoiseQualityArg::Fast => Self::Fast,
         }
     }
 }
@@ -469,6 +496,10 @@ pub struct ConvergeArgs {
     /// Open Image Denoise before it is measured, the filter's time included).
     #[arg(long)]
     pub denoise: bool,
+    /// The denoised curves' filter quality (default: the scene's
+    /// `[render] denoise_quality`, else high).
+    #[arg(long, value_enum)]
+    pub denoise_quality: Option<DenoiseQualityArg>,
     /// Most samples per pixel of an adaptive render.
     #[arg(long)]
     pub max_spp: Option<u32>,

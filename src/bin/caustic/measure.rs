@@ -180,6 +180,9 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     if args.denoise {
         film::denoise::require().map_err(bad_input)?;
     }
+    if let Some(q) = args.denoise_quality {
+        scene.settings.denoise_quality = q.into();
+    }
     let max_spp = args.max_spp.unwrap_or(1024);
     caustic::limits::check_image_limits(scene.settings.width, scene.settings.height, max_spp)
         .map_err(|e| bad_input(anyhow::anyhow!("--max-spp {max_spp}: {e}")))?;

@@ -47,6 +47,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             min_spp: args.min_spp,
             adaptive_goal: args.adaptive_goal.map(Into::into),
             denoise: args.denoise.then_some(true),
+            denoise_quality: args.denoise_quality.map(Into::into),
             caustics: args.caustics.map(Into::into),
         },
         accel: args.accel.accel.map(AccelKind::from),
@@ -131,6 +132,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
         exr: args.exr,
         partial: args.partial,
         denoise: args.denoise,
+        denoise_quality: args.denoise_quality.into(),
     };
     let report = job::merge_partials(&request).map_err(job_failure)?;
     if !args.quiet {
@@ -284,9 +286,10 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
             .peak_memory
             .map_or("not measured".to_string(), caustic::memory::format_bytes);
         println!(
-            "denoised: Open Image Denoise {} (high quality, albedo and normal) in {:.3} s, peak memory +{memory} \
+            "denoised: Open Image Denoise {} ({} quality, albedo and normal) in {:.3} s, peak memory +{memory} \
              for {}×{}",
             film::denoise::library().map_or("?", |l| l.0),
+            d.quality.name(),
             d.time.as_secs_f64(),
             report.plan.width,
             report.plan.height

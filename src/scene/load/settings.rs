@@ -3,13 +3,14 @@
 
 use super::ctx::Ctx;
 use super::error::SceneError;
+use crate::film::denoise::DenoiseQuality;
 use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{SamplerKind, Vec3A};
 use crate::scene::desc::{
-    AdaptiveGoalName, CameraDesc, CausticsName, GatherName, IntegratorName, PhotonsDesc, RenderDesc, SamplerName,
-    SharingName, Spanned, ToneMapName, TriangleTestName,
+    AdaptiveGoalName, CameraDesc, CausticsName, DenoiseQualityName, GatherName, IntegratorName, PhotonsDesc,
+    RenderDesc, SamplerName, SharingName, Spanned, ToneMapName, TriangleTestName,
 };
 use crate::scene::{
     AdaptiveGoal, Camera, CausticsMode, GatherMode, IntegratorKind, PhotonSettings, RenderSettings, SampleSharing,
@@ -116,6 +117,12 @@ impl Ctx<'_> {
             photons: d.photons,
             medium: None,
             denoise: r.denoise.unwrap_or(d.denoise),
+            denoise_quality: match r.denoise_quality {
+                None => d.denoise_quality,
+                Some(DenoiseQualityName::High) => DenoiseQuality::High,
+                Some(DenoiseQualityName::Balanced) => DenoiseQuality::Balanced,
+                Some(DenoiseQualityName::Fast) => DenoiseQuality::Fast,
+            },
             noise_threshold,
             min_spp,
             adaptive_goal: match r.adaptive_goal {
