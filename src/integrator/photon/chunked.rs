@@ -329,10 +329,14 @@ impl ChunkedTree {
     pub fn nearest_n_within(&self, q: &[f32; 3], r2: f32, k: NonZero<usize>) -> Vec<Neighbour> {
         let mut found: Vec<Neighbour> = Vec::new();
         let mut reach = r2;
+        // Once k points are found, a later chunk is searched only within the
+        // k-th distance (inclusive, so ties still compete): nothing beyond
+        // it can enter the result.
+        let mut bound = r2;
         self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
             found.extend(
                 c.tree
-                    .nearest_n_within::<SquaredEuclidean>(q, r2, k, false)
+                    .nearest_n_within::<SquaredEuclidean>(q, bound, k, false)
                     .into_iter()
                     .map(|nb| Neighbour {
                         distance: nb.distance,
@@ -348,7 +352,8 @@ impl ChunkedTree {
                 found.truncate(k.get());
             }
             // The k-th distance bounds what another chunk could add.
-            found.iter().fold(0.0f32, |m, n| m.max(n.distance))
+            bound = found.iter().fold(0.0f32, |m, n| m.max(n.distance));
+            bound
         });
         found
     }
