@@ -244,3 +244,98 @@ fn passes_give_the_single_loop_image_bit_for_bit() {
     let expected = single_loop_film(&scene, accel.as_ref(), &plan, out.photon_map.as_deref());
     assert!(out.film.pixels == expected, "the pass loop changed the image");
 }
+
+/// Rewrites a checkpoint as the previous format wrote it: no albedo and
+/// normal channels, `caustic.format` = `caustic-checkpoint-3`.
+fn downgrade_to_format_3(path: &Path) {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    let layer = image.layer_data;
+    let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = layer
+        .channel_data
+        .list
+        .into_iter()
+        .filter(|c| !c.name.to_string().starts_with("albedo.") && !c.name.to_string().starts_with("normal."))
+        .collect();
+    assert_eq!(channels.len(), 13, "the format-4 file had 6 AOV channels among 19");
+    let mut attributes = layer.attributes;
+    attributes.other.insert(
+        Text::from("caustic.format"),
+        AttributeValue::Text(Text::from(caustic::film::checkpoint::CHECKPOINT_FORMAT_3)),
+    );
+    let layer = Layer::new(
+        layer.size,
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
+
+/// A checkpoint of the format before the auxiliary images (no albedo and
+/// normal sums) resumes with them traced again for its samples: the image,
+/// its albedo and normal sums and the EXR equal an uninterrupted render's.
+#[test]
+fn a_format_3_checkpoint_resumes_with_its_auxiliary_images_traced_again() {
+    use caustic::job::{JobHooks, RenderJob, RenderRequest};
+    let dir = tempfile::tempdir().unwrap();
+    let request = |exr: &str| {
+        let mut r = RenderRequest::new(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/caustic.toml"));
+        r.overrides.width = Some(40);
+        r.overrides.height = Some(30);
+        r.overrides.spp = Some(6);
+        r.overrides.seed = Some(11);
+        r.overrides.photons = Some(20_000);
+        r.accel = Some(AccelKind::KdTree);
+        r.exr = Some(dir.path().join(exr));
+        r
+    };
+    let run = |r: &RenderRequest, hooks: &JobHooks| RenderJob::prepare(r).unwrap().run(hooks).unwrap();
+    let reference = run(&request("reference.exr"), &JobHooks::silent());
+    assert!(reference.output.complete);
+
+    // Stopped mid-render: the checkpoint holds a part of the samples.
+    let checkpoint = dir.path().join("ck.exr");
+    let mut first = request("first.exr");
+    first.checkpoint = Some(checkpoint.clone());
+    let cancel = AtomicBool::new(false);
+    let progress = |done: u64, _total: u64| {
+        if done >= 40 * 30 * 2 {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    };
+    let hooks = JobHooks {
+        cancel: Some(&cancel),
+        progress: &progress,
+        ..JobHooks::silent()
+    };
+    let stopped = run(&first, &hooks);
+    assert!(!stopped.output.complete);
+    let held = read_checkpoint(&checkpoint).unwrap();
+    assert!(held.has_aovs && held.accumulation.albedo.iter().any(|a| *a != Vec3::ZERO));
+
+    downgrade_to_format_3(&checkpoint);
+    let old = read_checkpoint(&checkpoint).unwrap();
+    assert!(!old.has_aovs);
+    assert!(old.accumulation.albedo.iter().all(|a| *a == Vec3::ZERO));
+    assert_eq!(old.accumulation.sum, held.accumulation.sum);
+
+    let mut resume = request("resumed.exr");
+    resume.resume = Some(checkpoint.clone());
+    let resumed = run(&resume, &JobHooks::silent());
+    assert!(resumed.output.complete);
+    assert!(resumed.output.film == reference.output.film);
+    // Without the retrace, the albedo sums would miss the first samples'.
+    assert_eq!(resumed.output.accumulation, reference.output.accumulation);
+    assert_eq!(
+        std::fs::read(dir.path().join("resumed.exr")).unwrap(),
+        std::fs::read(dir.path().join("reference.exr")).unwrap()
+    );
+}

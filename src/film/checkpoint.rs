@@ -30,8 +30,8 @@
 //! samples start at its range's first index) and the sums hold the shard's
 //! samples only. The file is written atomically (temporary file, fsync,
 //! rename), like the images. Files of the previous formats are still read:
-//! `caustic-checkpoint-3` (no AOV channels: their sums read as zero, so the
-//! AOVs of a render resumed from one miss its earlier samples) and
+//! `caustic-checkpoint-3` (no AOV channels: their sums read as zero, and a
+//! render resumed from one traces its earlier samples' AOVs again) and
 //! `caustic-checkpoint-2` (no display or shard attributes either).
 
 use super::accum::Accumulation;
@@ -86,6 +86,10 @@ pub struct Checkpoint {
     pub meta: CheckpointMeta,
     /// The per-pixel state.
     pub accumulation: Accumulation,
+    /// False for a file of format 3 or older, which holds no albedo and
+    /// normal sums (the accumulation's are zero; a resume traces them again,
+    /// `integrator::render::retrace_aovs`).
+    pub has_aovs: bool,
 }
 
 /// A checkpoint could not be read.
@@ -325,7 +329,11 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
     if let Some(set) = &meta.shard {
         set.validate(&accumulation, meta.spp).map_err(invalid)?;
     }
-    Ok(Checkpoint { meta, accumulation })
+    Ok(Checkpoint {
+        meta,
+        accumulation,
+        has_aovs,
+    })
 }
 
 fn parse_meta(

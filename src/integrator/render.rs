@@ -716,6 +716,86 @@ enum Tracer<'a> {
     Path(Box<PathTracer<'a>>),
 }
 
+/// The camera rays of one pixel's samples.
+struct CameraSamples {
+    sampler: SamplerKind,
+    seed: u64,
+    pixel: u64,
+    x: u32,
+    y: u32,
+    width: u32,
+    height: u32,
+    spp: u32,
+    grid: (u32, u32),
+    pixel_seed: u32,
+}
+
+impl CameraSamples {
+    fn new(plan: &RenderPlan, x: u32, y: u32) -> Self {
+        let spp = plan.spp.max(1);
+        let pixel = y as u64 * plan.width as u64 + x as u64;
+        Self {
+            sampler: plan.sampler,
+            seed: plan.seed,
+            pixel,
+            x,
+            y,
+            width: plan.width,
+            height: plan.height,
+            spp,
+            grid: grid_for(spp),
+            pixel_seed: crate::math::rng::mix64(plan.seed ^ crate::math::rng::mix64(pixel)) as u32,
+        }
+    }
+
+    /// Sample `k`'s camera ray and its sampler, the ray's two dimensions drawn.
+    fn ray(&self, camera: &crate::scene::Camera, k: u32) -> (crate::math::Ray, Sampler) {
+        let mut rng = Sampler::new(self.sampler, self.seed, self.pixel, k as u64);
+        let sub = match self.sampler {
+            // Stratified jittered sub-pixel position (gx × gy = spp), the
+            // strata visited in a per-pixel random order: a pixel stopped
+            // before its last sample is still unbiased.
+            SamplerKind::Independent => stratified(
+                permute(k, self.spp, self.pixel_seed),
+                self.grid.0,
+                self.grid.1,
+                rng.vec2(),
+            ),
+            // Sobol points are stratified over the pixel's samples.
+            SamplerKind::Sobol => rng.vec2(),
+        };
+        let ray = camera.ray(self.x as f32 + sub.x, self.y as f32 + sub.y, self.width, self.height);
+        (ray, rng)
+    }
+}
+
+/// Traces the albedo and normal of the samples `acc` already holds, for an
+/// accumulation read from a checkpoint without them (format 3 or older):
+/// the same camera rays as the render's, added in increasing sample index
+/// from zero, so the sums are bit for bit those of an uninterrupted render.
+/// Replaces whatever AOV sums `acc` held.
+pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &mut Accumulation) {
+    let aovs = AovTracer::new(scene, accel);
+    let width = acc.width as usize;
+    let sums: Vec<(Vec3, Vec3)> = (0..acc.len())
+        .into_par_iter()
+        .map(|i| {
+            let camera_samples = CameraSamples::new(plan, (i % width) as u32, (i / width) as u32);
+            let (mut albedo, mut normal) = (Vec3A::ZERO, Vec3A::ZERO);
+            for k in 0..acc.taken[i].min(AOV_SAMPLES) {
+                let (a, n) = aovs.trace(&camera_samples.ray(&scene.camera, k).0);
+                albedo += a;
+                normal += n;
+            }
+            (Vec3::from(albedo), Vec3::from(normal))
+        })
+        .collect();
+    for (i, (albedo, normal)) in sums.into_iter().enumerate() {
+        acc.albedo[i] = albedo;
+        acc.normal[i] = normal;
+    }
+}
+
 /// Brings every pixel of the tile to `target` samples (pixels already there
 /// are left alone), in increasing sample index, the first [`AOV_SAMPLES`]
 /// of them also tracing the albedo and normal. Stops before the next pixel
@@ -729,8 +809,6 @@ fn render_tile_pass(
     target: u32,
     stop: &Stop,
 ) -> PassWork {
-    let spp = plan.spp.max(1);
-    let (gx, gy) = grid_for(spp);
     let seed = plan.seed;
     let camera = &scene.camera;
     let tile = state.tile;
@@ -750,23 +828,14 @@ fn render_tile_pass(
             }
             let pixel = y as u64 * plan.width as u64 + x as u64;
             let strata = PixelStrata::new(plan, seed, pixel);
-            let pixel_seed = crate::math::rng::mix64(seed ^ crate::math::rng::mix64(pixel)) as u32;
+            let camera_samples = CameraSamples::new(plan, x, y);
             // Continue the f32 running sums exactly where they stopped.
             let mut sum = Vec3A::from(acc.sum[i]);
             let mut odd = Vec3A::from(acc.odd[i]);
             let (mut kept, mut odd_kept) = (acc.kept[i], acc.odd_kept[i]);
             let (mut albedo, mut normal) = (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i]));
             for k in first..target {
-                let mut rng = Sampler::new(plan.sampler, seed, pixel, k as u64);
-                let sub = match plan.sampler {
-                    // Stratified jittered sub-pixel position (gx × gy = spp),
-                    // the strata visited in a per-pixel random order: a pixel
-                    // stopped before its last sample is still unbiased.
-                    SamplerKind::Independent => stratified(permute(k, spp, pixel_seed), gx, gy, rng.vec2()),
-                    // Sobol points are stratified over the pixel's samples.
-                    SamplerKind::Sobol => rng.vec2(),
-                };
-                let ray = camera.ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
+                let (ray, mut rng) = camera_samples.ray(camera, k);
                 out.rays.camera += 1;
                 if plan.aovs && k < AOV_SAMPLES {
                     // No random numbers: the sample below is unchanged.

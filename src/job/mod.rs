@@ -278,6 +278,9 @@ pub struct RenderJob {
     pub checkpoint_every: Duration,
     /// The accumulation the render continues (empty for a fresh render).
     pub start: Accumulation,
+    /// `start` comes from a checkpoint without albedo and normal sums
+    /// (format 3 or older): they are traced again before the render goes on.
+    pub retrace_aovs: bool,
     /// The checkpoint this job resumes, if any.
     pub resumed_from: Option<PathBuf>,
     /// Debug overlay.
@@ -446,9 +449,9 @@ impl RenderJob {
             film::check_writable(out)?;
         }
         let (w, h, spp) = (scene.settings.width, scene.settings.height, scene.settings.spp);
-        let mut start = match resumed {
-            Some(c) => c.accumulation,
-            None => Accumulation::new(w, h),
+        let (mut start, retrace_aovs) = match resumed {
+            Some(c) => (c.accumulation, !c.has_aovs),
+            None => (Accumulation::new(w, h), false),
         };
         if let Some(set) = &shard {
             set.prepare_for_render(&mut start, spp);
@@ -462,6 +465,7 @@ impl RenderJob {
             checkpoint: checkpoint_path.map(|p| (p, meta)),
             checkpoint_every: request.checkpoint_every,
             start,
+            retrace_aovs,
             resumed_from: request.resume.clone(),
             debug: request.debug,
             time_limit: request.time_limit,
@@ -484,6 +488,7 @@ impl RenderJob {
             checkpoint: None,
             checkpoint_every: Duration::from_secs(60),
             start,
+            retrace_aovs: false,
             resumed_from: None,
             debug: None,
             time_limit: None,
@@ -568,7 +573,14 @@ impl RenderJob {
         };
         let begin = Instant::now();
         let denoising = st.denoise;
-        let mut output = integrator::render_with_traced(&self.scene, accel, &plan, self.photons, self.start, &control);
+        let mut start = self.start;
+        // A samples shard's sums hold only its own range of sample indices,
+        // which the retrace (from index 0) does not know: it keeps zeros.
+        let samples_shard = self.shard.as_ref().is_some_and(|set| set.mode == ShardMode::Samples);
+        if self.retrace_aovs && plan.aovs && !samples_shard {
+            integrator::render::retrace_aovs(&self.scene, accel, &plan, &mut start);
+        }
+        let mut output = integrator::render_with_traced(&self.scene, accel, &plan, self.photons, start, &control);
         if let Some(set) = &shard {
             output.complete = set.is_complete(&output.accumulation, st.spp);
             output.timed_out &= !output.complete;
