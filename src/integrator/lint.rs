@@ -32,6 +32,12 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
 pub fn settings_warnings(scene: &Scene) -> Vec<String> {
     let s = &scene.settings;
     let mut out = Vec::new();
+    if !s.denoise && s.denoise_quality != crate::film::denoise::DenoiseQuality::default() {
+        out.push(format!(
+            "the denoising quality `{}` is ignored: the image is not denoised (`[render] denoise = true` or --denoise)",
+            s.denoise_quality.name()
+        ));
+    }
     if s.integrator == IntegratorKind::Path {
         if s.ambient.max_element() > 0.0 {
             out.push("`[render] ambient` is ignored: the path integrator computes indirect light".into());
@@ -202,6 +208,18 @@ mod tests {
         assert!(w[0].contains("1.200 in red"), "{w:?}");
 
         assert!(warnings_of(&Material::diffuse("ok", Vec3A::splat(0.9)), IntegratorKind::Path, true).is_empty());
+    }
+
+    #[test]
+    fn a_denoising_quality_without_denoising_is_named() {
+        let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"));
+        let mut scene = crate::scene::load_scene(path).unwrap();
+        assert!(settings_warnings(&scene).is_empty());
+        scene.settings.denoise_quality = crate::film::denoise::DenoiseQuality::Fast;
+        let w = settings_warnings(&scene);
+        assert!(w.len() == 1 && w[0].contains("`fast` is ignored"), "{w:?}");
+        scene.settings.denoise = true;
+        assert!(settings_warnings(&scene).is_empty());
     }
 
     #[test]
