@@ -716,55 +716,71 @@ enum Tracer<'a> {
     Path(Box<PathTracer<'a>>),
 }
 
-/// The camera rays of one pixel's samples.
-struct CameraSamples {
+/// The camera rays of a render's pixel samples: what is shared by every
+/// pixel, computed once per pass.
+struct CameraSamples<'a> {
+    camera: &'a crate::scene::Camera,
     sampler: SamplerKind,
     seed: u64,
-    pixel: u64,
-    x: u32,
-    y: u32,
     width: u32,
     height: u32,
     spp: u32,
     grid: (u32, u32),
-    pixel_seed: u32,
 }
 
-impl CameraSamples {
-    fn new(plan: &RenderPlan, x: u32, y: u32) -> Self {
+/// The camera rays of one pixel's samples.
+struct PixelSamples<'a> {
+    render: &'a CameraSamples<'a>,
+    x: u32,
+    y: u32,
+    /// Row-major pixel index (the random streams' key).
+    pixel: u64,
+    /// Seed of the pixel's order of sub-pixel strata.
+    order_seed: u32,
+}
+
+impl<'a> CameraSamples<'a> {
+    fn new(scene: &'a Scene, plan: &RenderPlan) -> Self {
         let spp = plan.spp.max(1);
-        let pixel = y as u64 * plan.width as u64 + x as u64;
         Self {
+            camera: &scene.camera,
             sampler: plan.sampler,
             seed: plan.seed,
-            pixel,
-            x,
-            y,
             width: plan.width,
             height: plan.height,
             spp,
             grid: grid_for(spp),
-            pixel_seed: crate::math::rng::mix64(plan.seed ^ crate::math::rng::mix64(pixel)) as u32,
         }
     }
 
+    fn pixel(&'a self, x: u32, y: u32) -> PixelSamples<'a> {
+        let pixel = y as u64 * self.width as u64 + x as u64;
+        PixelSamples {
+            render: self,
+            x,
+            y,
+            pixel,
+            order_seed: crate::math::rng::mix64(self.seed ^ crate::math::rng::mix64(pixel)) as u32,
+        }
+    }
+}
+
+impl PixelSamples<'_> {
     /// Sample `k`'s camera ray and its sampler, the ray's two dimensions drawn.
-    fn ray(&self, camera: &crate::scene::Camera, k: u32) -> (crate::math::Ray, Sampler) {
-        let mut rng = Sampler::new(self.sampler, self.seed, self.pixel, k as u64);
-        let sub = match self.sampler {
+    fn ray(&self, k: u32) -> (crate::math::Ray, Sampler) {
+        let r = self.render;
+        let mut rng = Sampler::new(r.sampler, r.seed, self.pixel, k as u64);
+        let sub = match r.sampler {
             // Stratified jittered sub-pixel position (gx × gy = spp), the
             // strata visited in a per-pixel random order: a pixel stopped
             // before its last sample is still unbiased.
-            SamplerKind::Independent => stratified(
-                permute(k, self.spp, self.pixel_seed),
-                self.grid.0,
-                self.grid.1,
-                rng.vec2(),
-            ),
+            SamplerKind::Independent => stratified(permute(k, r.spp, self.order_seed), r.grid.0, r.grid.1, rng.vec2()),
             // Sobol points are stratified over the pixel's samples.
             SamplerKind::Sobol => rng.vec2(),
         };
-        let ray = camera.ray(self.x as f32 + sub.x, self.y as f32 + sub.y, self.width, self.height);
+        let ray = r
+            .camera
+            .ray(self.x as f32 + sub.x, self.y as f32 + sub.y, r.width, r.height);
         (ray, rng)
     }
 }
@@ -777,13 +793,14 @@ impl CameraSamples {
 pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &mut Accumulation) {
     let aovs = AovTracer::new(scene, accel);
     let width = acc.width as usize;
+    let camera_samples = CameraSamples::new(scene, plan);
     let sums: Vec<(Vec3, Vec3)> = (0..acc.len())
         .into_par_iter()
         .map(|i| {
-            let camera_samples = CameraSamples::new(plan, (i % width) as u32, (i / width) as u32);
+            let samples = camera_samples.pixel((i % width) as u32, (i / width) as u32);
             let (mut albedo, mut normal) = (Vec3A::ZERO, Vec3A::ZERO);
             for k in 0..acc.taken[i].min(AOV_SAMPLES) {
-                let (a, n) = aovs.trace(&camera_samples.ray(&scene.camera, k).0);
+                let (a, n) = aovs.trace(&samples.ray(k).0);
                 albedo += a;
                 normal += n;
             }
@@ -810,7 +827,7 @@ fn render_tile_pass(
     stop: &Stop,
 ) -> PassWork {
     let seed = plan.seed;
-    let camera = &scene.camera;
+    let camera_samples = CameraSamples::new(scene, plan);
     let tile = state.tile;
     let tw = (tile.x1 - tile.x0) as usize;
     let acc = &mut state.acc;
@@ -826,16 +843,15 @@ fn render_tile_pass(
             if first >= target || acc.converged[i] {
                 continue;
             }
-            let pixel = y as u64 * plan.width as u64 + x as u64;
-            let strata = PixelStrata::new(plan, seed, pixel);
-            let camera_samples = CameraSamples::new(plan, x, y);
+            let samples = camera_samples.pixel(x, y);
+            let strata = PixelStrata::new(plan, seed, samples.pixel);
             // Continue the f32 running sums exactly where they stopped.
             let mut sum = Vec3A::from(acc.sum[i]);
             let mut odd = Vec3A::from(acc.odd[i]);
             let (mut kept, mut odd_kept) = (acc.kept[i], acc.odd_kept[i]);
             let (mut albedo, mut normal) = (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i]));
             for k in first..target {
-                let (ray, mut rng) = camera_samples.ray(camera, k);
+                let (ray, mut rng) = samples.ray(k);
                 out.rays.camera += 1;
                 if plan.aovs && k < AOV_SAMPLES {
                     // No random numbers: the sample below is unchanged.
