@@ -21,4 +21,5 @@ pub mod limits;
 pub mod math;
 pub mod memory;
 pub mod scene;
+pub mod texture;
 pub mod view;

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     &["math", "memory"],
     &["limits"],
-    &["geometry", "film"],
+    &["geometry", "film", "texture"],
     &["io"],
     &["scene"],
     &["accel", "bsdf"],

@@ -3,13 +3,14 @@
 use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelStats, Hit, TriangleTest};
 use crate::math::Ray;
-use crate::scene::{Mesh, Scene, Shape};
+use crate::scene::{Cutouts, Mesh, Scene, Shape};
 use std::sync::Arc;
 
 /// Tests every object and every triangle.
 pub struct BruteForce {
     objects: Vec<BruteObject>,
     test: TriangleTest,
+    cutouts: Option<Arc<Cutouts>>,
 }
 
 enum BruteObject {
@@ -32,7 +33,11 @@ impl BruteForce {
                 }
             })
             .collect();
-        Self { objects, test }
+        Self {
+            objects,
+            test,
+            cutouts: Cutouts::of(scene),
+        }
     }
 
     fn query(&self, ray: &Ray, t_max: f32, any: bool) -> Option<Hit> {
@@ -42,7 +47,11 @@ impl BruteForce {
             let instance = i as u32;
             match object {
                 BruteObject::Sphere(s) => {
-                    if let Some(t) = s.intersect(ray, t_max) {
+                    let t = match &self.cutouts {
+                        Some(c) => c.sphere(instance, s, ray, t_max),
+                        None => s.intersect(ray, t_max),
+                    };
+                    if let Some(t) = t {
                         best = Some(Hit {
                             t,
                             instance,
@@ -54,7 +63,11 @@ impl BruteForce {
                     }
                 }
                 BruteObject::Quad(q) => {
-                    if let Some((t, u, v)) = q.intersect(ray, t_max) {
+                    let h = match &self.cutouts {
+                        Some(c) => c.quad(instance, q, ray, t_max),
+                        None => q.intersect(ray, t_max),
+                    };
+                    if let Some((t, u, v)) = h {
                         best = Some(Hit {
                             t,
                             instance,
@@ -74,7 +87,12 @@ impl BruteForce {
                             TriangleTest::Watertight => wt.intersect(p0, p1, p2, t_max),
                             TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, t_max),
                         };
-                        if let Some((t, u, v)) = h {
+                        let kept = |&(_, u, v): &(f32, f32, f32)| {
+                            self.cutouts
+                                .as_ref()
+                                .is_none_or(|c| c.keeps_triangle(instance, prim as u32, u, v))
+                        };
+                        if let Some((t, u, v)) = h.filter(kept) {
                             best = Some(Hit {
                                 t,
                                 instance,

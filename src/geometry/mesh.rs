@@ -1,6 +1,6 @@
 //! Triangle meshes in object space, shared by `Arc` between the objects that use them.
 
-use crate::math::{Aabb, Vec3, Vec3A};
+use crate::math::{Aabb, Vec2, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -15,6 +15,12 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Vertex indices of each triangle, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates, one per position, or none (`v = 0` at the
+    /// image's top row: see `crate::texture`).
+    pub uvs: Vec<Vec2>,
+    /// Unit tangents along increasing `u` with the bitangent's sign in `w`
+    /// (glTF's `TANGENT`), one per position, or none.
+    pub tangents: Vec<Vec4>,
 }
 
 /// What is wrong with a mesh's data (the loaders add the file and place).
@@ -44,6 +50,19 @@ pub enum MeshDataError {
     /// No triangle at all.
     #[error("the mesh has no faces")]
     Empty,
+    /// The texture-coordinate or tangent array does not match the vertex array.
+    #[error("{given} {what} for {vertices} vertices")]
+    AttributeCount {
+        /// `"texture coordinates"` or `"tangents"`.
+        what: &'static str,
+        /// Values given.
+        given: usize,
+        /// Vertices.
+        vertices: usize,
+    },
+    /// A texture coordinate or tangent is NaN or infinite.
+    #[error("vertex {1} has a non-finite {0}")]
+    NonFiniteAttribute(&'static str, usize),
 }
 
 impl Mesh {
@@ -96,7 +115,60 @@ impl Mesh {
             positions,
             normals,
             triangles,
+            uvs: Vec::new(),
+            tangents: Vec::new(),
         })
+    }
+
+    /// Adds texture coordinates, one per vertex.
+    pub fn with_uvs(mut self, uvs: Vec<Vec2>) -> Result<Self, MeshDataError> {
+        if uvs.len() != self.positions.len() {
+            return Err(MeshDataError::AttributeCount {
+                what: "texture coordinates",
+                given: uvs.len(),
+                vertices: self.positions.len(),
+            });
+        }
+        if let Some(i) = uvs.iter().position(|v| !v.is_finite()) {
+            return Err(MeshDataError::NonFiniteAttribute("texture coordinate", i));
+        }
+        self.uvs = uvs;
+        Ok(self)
+    }
+
+    /// Adds tangents (`xyz` along increasing `u`, `w` = ±1 the bitangent's
+    /// sign), one per vertex; `xyz` is normalised.
+    pub fn with_tangents(mut self, tangents: Vec<Vec4>) -> Result<Self, MeshDataError> {
+        if tangents.len() != self.positions.len() {
+            return Err(MeshDataError::AttributeCount {
+                what: "tangents",
+                given: tangents.len(),
+                vertices: self.positions.len(),
+            });
+        }
+        if let Some(i) = tangents.iter().position(|v| !v.is_finite()) {
+            return Err(MeshDataError::NonFiniteAttribute("tangent", i));
+        }
+        self.tangents = tangents
+            .into_iter()
+            .map(|t| {
+                let xyz = t.truncate().normalize_or_zero();
+                Vec4::from((xyz, if t.w < 0.0 { -1.0 } else { 1.0 }))
+            })
+            .collect();
+        Ok(self)
+    }
+
+    /// Texture coordinates of triangle `i`'s corners; without UVs `(0,0),
+    /// (1,0), (0,1)`, so that `(u, v)` are the barycentrics (Mitsuba's
+    /// parametrisation of a mesh without texture coordinates).
+    #[inline]
+    pub fn corner_uvs(&self, i: usize) -> [Vec2; 3] {
+        if self.uvs.is_empty() {
+            [Vec2::ZERO, Vec2::X, Vec2::Y]
+        } else {
+            self.triangles[i].map(|v| self.uvs[v as usize])
+        }
     }
 
     /// Per-vertex normals weighted by the angle of each incident corner
@@ -146,9 +218,9 @@ impl Mesh {
         Aabb::from_points(self.positions.iter().map(|&p| Vec3A::from(p)))
     }
 
-    /// Bytes held by the vertex, normal and index arrays.
+    /// Bytes held by the vertex attribute and index arrays.
     pub fn memory_bytes(&self) -> usize {
-        self.positions.len() * 24 + self.triangles.len() * 12
+        self.positions.len() * 24 + self.uvs.len() * 8 + self.tangents.len() * 16 + self.triangles.len() * 12
     }
 }
 

@@ -1,6 +1,7 @@
 //! Analytic shapes, stored in world space: spheres and quads.
 
-use crate::math::{gamma, Aabb, Ray, Vec3A};
+use crate::math::{gamma, Aabb, Ray, Vec2, Vec3A};
+use std::f32::consts::{PI, TAU};
 
 /// A sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +21,13 @@ impl Sphere {
     /// `c / q` rather than a difference of nearly equal numbers.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+        self.intersect_where(ray, t_max, |_| true)
+    }
+
+    /// The nearest root in `(0, t_max)` that `keep` accepts (an alpha
+    /// cutout may reject the near root and keep the far one).
+    #[inline]
+    pub fn intersect_where(&self, ray: &Ray, t_max: f32, keep: impl Fn(f32) -> bool) -> Option<f32> {
         let f = ray.origin - self.center;
         let a = ray.dir.length_squared();
         let b_half = -f.dot(ray.dir);
@@ -38,13 +46,33 @@ impl Sphere {
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
-        if t0 > 0.0 && t0 < t_max {
+        if t0 > 0.0 && t0 < t_max && keep(t0) {
             Some(t0)
-        } else if t1 > 0.0 && t1 < t_max {
+        } else if t1 > 0.0 && t1 < t_max && keep(t1) {
             Some(t1)
         } else {
             None
         }
+    }
+
+    /// Texture coordinates and their derivatives at surface point `p`, in
+    /// Mitsuba's `sphere` convention about the world's axes: `u = φ / 2π`
+    /// with `φ` the azimuth about +z from +x, `v = θ / π` with `θ` the angle
+    /// from +z; `∂p/∂u = 2π (−y, x, 0)` and `∂p/∂v = π (z cos φ, z sin φ,
+    /// −r sin θ)`, `(x, y, z) = p − centre`.
+    pub fn uv(&self, p: Vec3A) -> (Vec2, Vec3A, Vec3A) {
+        let l = p - self.center;
+        let mut phi = l.y.atan2(l.x);
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        let cos_theta = (l.z / self.radius).clamp(-1.0, 1.0);
+        let theta = cos_theta.acos();
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let (sin_phi, cos_phi) = phi.sin_cos();
+        let dpdu = Vec3A::new(-l.y, l.x, 0.0) * TAU;
+        let dpdv = Vec3A::new(l.z * cos_phi, l.z * sin_phi, -self.radius * sin_theta) * PI;
+        (Vec2::new(phi / TAU, theta / PI), dpdu, dpdv)
     }
 
     /// World bounds.
@@ -176,6 +204,30 @@ mod tests {
         let r = Ray::new(Vec3A::ZERO, Vec3A::Z);
         let t = s.intersect(&r, f32::INFINITY).unwrap();
         assert!((t - (1.0e5 - 0.01)).abs() < 0.01, "{t}");
+    }
+
+    #[test]
+    fn sphere_uv_follows_mitsuba() {
+        let s = Sphere {
+            center: Vec3A::new(1.0, 2.0, 3.0),
+            radius: 2.0,
+        };
+        // +x: φ = 0, θ = π/2.
+        let (uv, dpdu, dpdv) = s.uv(s.center + Vec3A::X * 2.0);
+        assert!((uv - Vec2::new(0.0, 0.5)).length() < 1e-6, "{uv}");
+        assert!((dpdu - Vec3A::new(0.0, 2.0 * TAU, 0.0)).length() < 1e-4);
+        assert!((dpdv - Vec3A::new(0.0, 0.0, -2.0 * PI)).length() < 1e-4);
+        // +y: φ = π/2; −y: φ = 3π/2 (u in [0, 1)); +z: v = 0; −z: v = 1.
+        assert!((s.uv(s.center + Vec3A::Y * 2.0).0.x - 0.25).abs() < 1e-6);
+        assert!((s.uv(s.center - Vec3A::Y * 2.0).0.x - 0.75).abs() < 1e-6);
+        assert!(s.uv(s.center + Vec3A::Z * 2.0).0.y.abs() < 1e-6);
+        assert!((s.uv(s.center - Vec3A::Z * 2.0).0.y - 1.0).abs() < 1e-6);
+        // The derivatives are those of the map: a small step in u moves p by dpdu·du.
+        let p = s.center + Vec3A::new(1.0, 1.0, 2.0f32.sqrt()).normalize() * 2.0;
+        let (uv, dpdu, _) = s.uv(p);
+        let (phi, theta) = (uv.x * TAU + 1e-3 * TAU, uv.y * PI);
+        let q = s.center + Vec3A::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()) * 2.0;
+        assert!(((q - p) - dpdu * 1e-3).length() < 1e-4);
     }
 
     #[test]

@@ -84,11 +84,14 @@ impl WaterSurface {
         let (dx, dz) = (self.size.x / nx as f32, self.size.y / nz as f32);
         let mut positions = Vec::with_capacity(vx * vz);
         let mut normals = Vec::with_capacity(vx * vz);
+        let mut uvs = Vec::with_capacity(vx * vz);
         for i in 0..vx {
             for j in 0..vz {
                 let (x, z) = (x0 + i as f32 * dx, z0 + j as f32 * dz);
                 positions.push(Vec3::new(x, self.center.y + self.height(x, z), z));
                 normals.push(Vec3::from(self.normal(x, z)));
+                // u along +x, v along +z over the surface's extent.
+                uvs.push(Vec2::new(i as f32 / nx as f32, j as f32 / nz as f32));
             }
         }
         let index = |i: usize, j: usize| (i * vz + j) as u32;
@@ -101,7 +104,7 @@ impl WaterSurface {
                 triangles.push([a, c, d]);
             }
         }
-        Mesh::new(name, positions, triangles, Some(normals))
+        Mesh::new(name, positions, triangles, Some(normals))?.with_uvs(uvs)
     }
 
     /// The region filled by the water for the fog: the surface's (x, z)

@@ -121,7 +121,7 @@ impl<'a> AovTracer<'a> {
                     r
                 }
             };
-            let (dir, tint) = match step(&self.scene.materials[si.material as usize]) {
+            let (dir, tint) = match step(&self.scene.materials[si.material as usize].at(si.uv)) {
                 Step::Stop(albedo) => return (weight * albedo, ns),
                 Step::Reflect(tint) => (mirror(ray.dir), tint),
                 Step::Refract(tint, ior) => {

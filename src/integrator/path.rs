@@ -275,7 +275,7 @@ impl<'a> PathTracer<'a> {
                 break;
             }
             let si = self.scene.surface_interaction(&ray, &hit);
-            let material = &self.scene.materials[si.material as usize];
+            let material = &*self.scene.materials[si.material as usize].at(si.uv);
             let bsdf = Bsdf::for_material(material, FresnelModel::Exact, Transport::Radiance);
             if bsdf.is_black() {
                 break;

@@ -210,7 +210,7 @@ impl<'a> Whitted<'a> {
     /// Radiance leaving the surface hit by `ray` toward its origin.
     fn shade(&self, ray: &Ray, hit: &crate::accel::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = self.scene.surface_interaction(ray, hit);
-        let m = &self.scene.materials[si.material as usize];
+        let m = &*self.scene.materials[si.material as usize].at(si.uv);
         if let Some(d) = m.dielectric {
             return self.dielectric(ray, &si, m, d, depth, ctx);
         }

@@ -5,6 +5,7 @@
 //! file, the place (line for text, byte offset for binary) and what is wrong.
 
 pub mod assets;
+pub mod image;
 pub mod obj;
 pub mod off;
 pub mod ply;

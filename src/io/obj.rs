@@ -9,7 +9,7 @@
 use super::source::{parse_f32, parse_i64, Source};
 use super::{LoadLimits, ParseError, Place};
 use crate::geometry::Mesh;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::io::Read;
 
@@ -54,23 +54,57 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
     let (models, _materials) = tobj::load_obj_buf(&mut &text[..], &options, |_| Ok((Vec::new(), HashMap::new())))
         .map_err(|e| ParseError::new(locate(&text, &e), format!("invalid OBJ: {e}")))?;
 
+    // Vertices are (position, texture coordinate) pairs once the file has
+    // UVs: a seam gives one position two UVs, so it becomes two vertices,
+    // whose normals still come from the position (`origin`).
+    let with_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
     let mut positions: Vec<Vec3> = Vec::new();
+    let mut origin: Vec<u32> = Vec::new();
+    let mut uvs: Vec<Vec2> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut position_triangles: Vec<[u32; 3]> = Vec::new();
+    let mut all_positions: Vec<Vec3> = Vec::new();
     let mut normals: Vec<Option<Vec3>> = Vec::new();
     let mut normals_consistent = true;
     for model in &models {
         let m = &model.mesh;
-        let offset = positions.len();
+        let offset = all_positions.len();
         if offset + m.positions.len() / 3 > u32::MAX as usize {
             return Err(ParseError::new(None, "more than 2^32 vertices".into()));
         }
-        positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        normals.resize(positions.len(), None);
-        triangles.extend(
+        all_positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        normals.resize(all_positions.len(), None);
+        position_triangles.extend(
             m.indices
                 .chunks_exact(3)
                 .map(|t| [t[0], t[1], t[2]].map(|i| i + offset as u32)),
         );
+        if with_uvs {
+            let has_uv = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
+            let mut vertex_of: HashMap<(u32, u32), u32> = HashMap::new();
+            let mut corners = Vec::with_capacity(m.indices.len());
+            for (k, &pi) in m.indices.iter().enumerate() {
+                let ti = if has_uv { m.texcoord_indices[k] } else { u32::MAX };
+                let key = (pi + offset as u32, ti);
+                let next = positions.len() as u32;
+                let v = *vertex_of.entry(key).or_insert_with(|| {
+                    positions.push(all_positions[key.0 as usize]);
+                    origin.push(key.0);
+                    // OBJ's v runs up the image; caustic's runs down.
+                    let uv = m
+                        .texcoords
+                        .get(2 * ti as usize..2 * ti as usize + 2)
+                        .map_or(Vec2::ZERO, |t| Vec2::new(t[0], 1.0 - t[1]));
+                    uvs.push(uv);
+                    next
+                });
+                corners.push(v);
+            }
+            if positions.len() > u32::MAX as usize {
+                return Err(ParseError::new(None, "more than 2^32 vertices".into()));
+            }
+            triangles.extend(corners.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        }
         if m.normal_indices.len() != m.indices.len() {
             normals_consistent = false;
             continue;
@@ -95,13 +129,18 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
     } else {
         None
     };
-    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+    if let Some(i) = all_positions.iter().position(|p| !p.is_finite()) {
         return Err(ParseError::new(
             None,
             format!("vertex {i} (counting from 0 in file order) has a non-finite coordinate"),
         ));
     }
-    Ok(Mesh::new(name, positions, triangles, normals)?)
+    if !with_uvs {
+        return Ok(Mesh::new(name, all_positions, position_triangles, normals)?);
+    }
+    let normals = normals.unwrap_or_else(|| Mesh::angle_weighted_normals(&all_positions, &position_triangles));
+    let normals = origin.iter().map(|&o| normals[o as usize]).collect();
+    Ok(Mesh::new(name, positions, triangles, Some(normals))?.with_uvs(uvs)?)
 }
 
 /// 1-based line number of byte `offset`.
@@ -204,6 +243,28 @@ mod tests {
             "{:?}",
             m.normals
         );
+    }
+
+    #[test]
+    fn texture_coordinates_split_seams_and_flip_v() {
+        // Two triangles sharing the edge 2-3, with different UVs on each side at vertex 3.
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.25\n\
+                    f 1/1 2/2 3/3\nf 2/2 4/4 3/1\n";
+        let m = load_text(text).unwrap();
+        // Vertex 3 has two UVs: five vertices in all.
+        assert_eq!(m.positions.len(), 5);
+        assert_eq!(m.uvs.len(), 5);
+        let uv_at = |t: usize, k: usize| m.uvs[m.triangles[t][k] as usize];
+        assert_eq!(uv_at(0, 0), Vec2::new(0.0, 1.0));
+        assert_eq!(uv_at(0, 2), Vec2::new(0.0, 0.0));
+        assert_eq!(uv_at(1, 1), Vec2::new(0.5, 0.75));
+        assert_eq!(uv_at(1, 2), Vec2::new(0.0, 1.0));
+        assert_eq!(
+            m.positions[m.triangles[0][2] as usize],
+            m.positions[m.triangles[1][2] as usize]
+        );
+        // A flat square: every normal is +z, seams included.
+        assert!(m.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
     }
 
     #[test]

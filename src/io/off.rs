@@ -3,7 +3,7 @@
 //! ```text
 //! OFF                 optional header: [ST][C][N]OFF (NOFF: per-vertex normals)
 //! V F E               counts (E, the edge count, is optional and ignored)
-//! x y z [nx ny nz] [colour / texture coordinates ignored]    V lines
+//! x y z [nx ny nz] [colour ignored] [s t]    V lines (s t with STOFF)
 //! n i0 i1 ... i(n-1) [colour ignored]                        F lines
 //! ```
 //! `#` starts a comment anywhere. Polygons are fan-triangulated (they are
@@ -13,7 +13,7 @@
 use super::source::{parse_f32, parse_i64, show, Source};
 use super::{bounded_capacity, fan, LoadLimits, ParseError, Place};
 use crate::geometry::Mesh;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// Largest polygon accepted (vertices per face).
 pub const MAX_POLYGON: u64 = 1 << 16;
@@ -25,6 +25,7 @@ const RESERVE_CAP: u64 = 1 << 20;
 #[derive(Default)]
 struct Header {
     normals: bool,
+    uvs: bool,
 }
 
 /// Parses an `[ST][C][N]OFF` keyword. `Ok(None)`: not a header (the file starts with the counts).
@@ -34,7 +35,8 @@ fn header_keyword(token: &[u8], line: u64) -> Result<Option<Header>, ParseError>
     };
     let mut header = Header::default();
     if let Some(rest) = prefix.strip_prefix(b"ST") {
-        prefix = rest; // texture coordinates: skipped with the rest of the line
+        header.uvs = true;
+        prefix = rest;
     }
     if let Some(rest) = prefix.strip_prefix(b"C") {
         prefix = rest; // colours: skipped with the rest of the line
@@ -150,6 +152,9 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
     let mut normals = header
         .normals
         .then(|| Vec::with_capacity(bounded_capacity(vertex_count, RESERVE_CAP)));
+    let mut uvs = header
+        .uvs
+        .then(|| Vec::with_capacity(bounded_capacity(vertex_count, RESERVE_CAP)));
     let mut values = [0f32; 6];
     for v in 0..vertex_count {
         for (k, slot) in values.iter_mut().take(values_per_vertex).enumerate() {
@@ -190,7 +195,31 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
         if let Some(n) = normals.as_mut() {
             n.push(Vec3::new(values[3], values[4], values[5]));
         }
-        // Colours and texture coordinates end the line: skipped.
+        if let Some(uvs) = uvs.as_mut() {
+            // `s t` are the line's last two values (a colour of 1, 3 or 4
+            // values may come before them). Taken as written, as for PLY.
+            let mut last = [f32::NAN; 2];
+            let mut seen = 0;
+            let line = s.line();
+            while let Some(t) = s.token(false, true)? {
+                let x = parse_f32(t).ok_or_else(|| {
+                    ParseError::new(
+                        Some(Place::Line(line)),
+                        format!("vertex {v}: expected a number, found {}", show(t)),
+                    )
+                })?;
+                last = [last[1], x];
+                seen += 1;
+            }
+            if seen < 2 || !last[0].is_finite() || !last[1].is_finite() {
+                return Err(ParseError::new(
+                    Some(Place::Line(s.line())),
+                    format!("vertex {v}: STOFF needs finite texture coordinates s t at the end of the line"),
+                ));
+            }
+            uvs.push(Vec2::new(last[0], last[1]));
+        }
+        // Colours end the line: skipped.
         s.next_line()?;
     }
 
@@ -264,7 +293,11 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
             format!("unexpected data after the last of the {face_count} faces the header announces (wrong counts?)"),
         ));
     }
-    Ok(Mesh::new(name, positions, triangles, normals)?)
+    let mesh = Mesh::new(name, positions, triangles, normals)?;
+    Ok(match uvs {
+        Some(uvs) => mesh.with_uvs(uvs)?,
+        None => mesh,
+    })
 }
 
 #[cfg(test)]
@@ -278,6 +311,25 @@ mod tests {
         let path = dir.path().join("m.off");
         std::fs::write(&path, text).unwrap();
         load_mesh(&path)
+    }
+
+    #[test]
+    fn stoff_reads_texture_coordinates_after_colours() {
+        let m = load_text("STOFF\n3 1 0\n0 0 0 0 0\n1 0 0 1 0.5\n0 1 0 0.25 1\n3 0 1 2\n").unwrap();
+        assert_eq!(m.uvs, vec![Vec2::ZERO, Vec2::new(1.0, 0.5), Vec2::new(0.25, 1.0)]);
+        let m = load_text("STCOFF\n3 1 0\n0 0 0 1 0 0 1 0 0\n1 0 0 0 1 0 1 1 0.5\n0 1 0 0 0 1 1 0.25 1\n3 0 1 2\n")
+            .unwrap();
+        assert_eq!(m.uvs[1], Vec2::new(1.0, 0.5));
+        let e = load_text("STOFF\n3 1 0\n0 0 0 0\n1 0 0 1 0.5\n0 1 0 0.25 1\n3 0 1 2\n").unwrap_err();
+        assert!(
+            e.message.contains("line 3") && e.message.contains("texture coordinates"),
+            "{e}"
+        );
+        // Plain OFF keeps ignoring whatever follows the coordinates.
+        assert!(load_text("OFF\n3 1 0\n0 0 0 7\n1 0 0 7\n0 1 0 7\n3 0 1 2\n")
+            .unwrap()
+            .uvs
+            .is_empty());
     }
 
     #[test]

@@ -11,7 +11,7 @@
 use super::source::{parse_f32, parse_i64, show, ByteStream, Source};
 use super::{bounded_capacity, fan, LoadLimits, ParseError, Place};
 use crate::geometry::Mesh;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// Largest polygon accepted (vertices per face).
 pub const MAX_POLYGON: u64 = 1 << 16;
@@ -219,17 +219,30 @@ fn parse_header(s: &mut ByteStream, limits: &LoadLimits) -> Result<Header, Parse
 
 /// Where the vertex data sits in a vertex record.
 struct VertexLayout {
-    /// For each property: which of x y z nx ny nz it fills (0..6), if any.
+    /// For each property: which of x y z nx ny nz u v it fills (0..8), if any.
     slots: Vec<Option<usize>>,
     normals: bool,
+    uvs: bool,
 }
+
+/// Names of the texture-coordinate properties, by slot (6: u, 7: v), as
+/// the common exporters write them.
+const UV_NAMES: [&[&str]; 2] = [
+    &["u", "s", "texture_u", "texture_s"],
+    &["v", "t", "texture_v", "texture_t"],
+];
 
 fn vertex_layout(element: &Element) -> Result<VertexLayout, ParseError> {
     let names = ["x", "y", "z", "nx", "ny", "nz"];
     let mut slots = vec![None; element.properties.len()];
-    let mut found = [false; 6];
+    let mut found = [false; 8];
     for (i, p) in element.properties.iter().enumerate() {
-        if let Some(k) = names.iter().position(|&n| n == p.name()) {
+        let uv = UV_NAMES.iter().position(|set| set.contains(&p.name())).map(|k| 6 + k);
+        if let Some(k) = names.iter().position(|&n| n == p.name()).or(uv) {
+            if found[k] {
+                // A second spelling of the same coordinate: the first wins.
+                continue;
+            }
             if let Property::List { .. } = p {
                 return Err(ParseError::new(
                     None,
@@ -247,15 +260,14 @@ fn vertex_layout(element: &Element) -> Result<VertexLayout, ParseError> {
         ));
     }
     let normals = found[3] && found[4] && found[5];
-    if !normals {
-        // A partial normal (say nx ny without nz) is ignored: normals are computed.
-        for s in slots.iter_mut() {
-            if matches!(s, Some(k) if *k >= 3) {
-                *s = None;
-            }
+    let uvs = found[6] && found[7];
+    // A partial normal (say nx ny without nz) or a lone u is ignored.
+    for s in slots.iter_mut() {
+        if matches!(s, Some(k) if (3..6).contains(k) && !normals || *k >= 6 && !uvs) {
+            *s = None;
         }
     }
-    Ok(VertexLayout { slots, normals })
+    Ok(VertexLayout { slots, normals, uvs })
 }
 
 /// Why reading one value failed.
@@ -383,6 +395,7 @@ impl<const BIG: bool> Values for Binary<'_, BIG> {
 struct Body {
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
     triangles: Vec<[u32; 3]>,
 }
 
@@ -439,6 +452,9 @@ fn parse_body<V: Values>(v: &mut V, header: &Header) -> Result<Body, ParseError>
         normals: layout
             .normals
             .then(|| Vec::with_capacity(bounded_capacity(vertex_count, RESERVE_CAP))),
+        uvs: layout
+            .uvs
+            .then(|| Vec::with_capacity(bounded_capacity(vertex_count, RESERVE_CAP))),
         triangles: Vec::with_capacity(bounded_capacity(face.count, RESERVE_CAP)),
     };
     let mut polygon: Vec<u32> = Vec::with_capacity(16);
@@ -449,7 +465,7 @@ fn parse_body<V: Values>(v: &mut V, header: &Header) -> Result<Body, ParseError>
         for index in 0..element.count {
             let fail = |v: &V, e| value_error(v, e, element, index);
             if is_vertex {
-                let mut values = [0f32; 6];
+                let mut values = [0f32; 8];
                 for (p, slot) in element.properties.iter().zip(&layout.slots) {
                     match (p, slot) {
                         (Property::Scalar { ty, .. }, Some(k)) => values[*k] = v.float(*ty).map_err(|e| fail(v, e))?,
@@ -459,8 +475,22 @@ fn parse_body<V: Values>(v: &mut V, header: &Header) -> Result<Body, ParseError>
                         }
                     }
                 }
-                let used = if layout.normals { 6 } else { 3 };
-                if let Some(bad) = values[..used].iter().find(|x| !x.is_finite()) {
+                let used = [
+                    true,
+                    true,
+                    true,
+                    layout.normals,
+                    layout.normals,
+                    layout.normals,
+                    layout.uvs,
+                    layout.uvs,
+                ];
+                if let Some(bad) = values
+                    .iter()
+                    .zip(used)
+                    .find(|(x, u)| *u && !x.is_finite())
+                    .map(|(x, _)| x)
+                {
                     return Err(ParseError::new(
                         Some(v.place()),
                         format!("{} has a non-finite value ({bad})", record(element, index)),
@@ -469,6 +499,10 @@ fn parse_body<V: Values>(v: &mut V, header: &Header) -> Result<Body, ParseError>
                 body.positions.push(Vec3::new(values[0], values[1], values[2]));
                 if let Some(n) = body.normals.as_mut() {
                     n.push(Vec3::new(values[3], values[4], values[5]));
+                }
+                // PLY's texture coordinates are taken as written (as Mitsuba does).
+                if let Some(uv) = body.uvs.as_mut() {
+                    uv.push(Vec2::new(values[6], values[7]));
                 }
             } else if is_face {
                 for (k, p) in element.properties.iter().enumerate() {
@@ -602,7 +636,11 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
         Encoding::BinaryLittleEndian => parse_body(&mut Binary::<false>(s), &header)?,
         Encoding::BinaryBigEndian => parse_body(&mut Binary::<true>(s), &header)?,
     };
-    Ok(Mesh::new(name, body.positions, body.triangles, body.normals)?)
+    let mesh = Mesh::new(name, body.positions, body.triangles, body.normals)?;
+    Ok(match body.uvs {
+        Some(uvs) => mesh.with_uvs(uvs)?,
+        None => mesh,
+    })
 }
 
 #[cfg(test)]
@@ -696,6 +734,39 @@ mod tests {
         let m = load_bytes("t.ply", text.as_bytes()).unwrap();
         assert_eq!(m.normals, vec![Vec3::X, Vec3::Y, Vec3::Z]);
         assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn texture_coordinates_under_their_common_names() {
+        for (u, v) in [
+            ("u", "v"),
+            ("s", "t"),
+            ("texture_u", "texture_v"),
+            ("texture_s", "texture_t"),
+        ] {
+            let text = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                 property float z\nproperty float {u}\nproperty float {v}\n\
+                 element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                 0 0 0 0 0\n1 0 0 1 0.25\n0 1 0 0.5 1\n3 0 1 2\n"
+            );
+            let m = load_bytes("t.ply", text.as_bytes()).unwrap();
+            assert_eq!(
+                m.uvs,
+                vec![Vec2::ZERO, Vec2::new(1.0, 0.25), Vec2::new(0.5, 1.0)],
+                "{u} {v}"
+            );
+        }
+        // A lone u is ignored.
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+            property float z\nproperty float u\nelement face 1\nproperty list uchar int vertex_indices\n\
+            end_header\n0 0 0 0\n1 0 0 1\n0 1 0 0.5\n3 0 1 2\n";
+        assert!(load_bytes("t.ply", text.as_bytes()).unwrap().uvs.is_empty());
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+            property float z\nproperty float u\nproperty float v\nelement face 1\n\
+            property list uchar int vertex_indices\nend_header\n0 0 0 0 nan\n1 0 0 1 0\n0 1 0 0.5 1\n3 0 1 2\n";
+        let e = load_bytes("t.ply", text.as_bytes()).unwrap_err();
+        assert!(e.message.contains("non-finite"), "{e}");
     }
 
     #[test]

@@ -13,7 +13,7 @@ mod transform;
 
 pub use aabb::Aabb;
 pub use frame::Frame;
-pub use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
+pub use glam::{Affine2, Affine3A, Mat2, Mat3A, Vec2, Vec3, Vec3A, Vec4};
 pub use offset::offset_ray_origin;
 pub use ray::Ray;
 pub use rng::Rng;

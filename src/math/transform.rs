@@ -55,6 +55,12 @@ impl Transform {
         self.to_world == Affine3A::IDENTITY
     }
 
+    /// Object-space vector (a tangent, an edge) to world.
+    #[inline]
+    pub fn vector(&self, v: Vec3A) -> Vec3A {
+        self.to_world.transform_vector3a(v)
+    }
+
     /// Object-space point to world.
     #[inline]
     pub fn point(&self, p: Vec3A) -> Vec3A {

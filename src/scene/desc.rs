@@ -29,6 +29,9 @@ pub struct SceneDesc {
     pub render: RenderDesc,
     /// `[camera]` (required).
     pub camera: CameraDesc,
+    /// `[textures.NAME]`.
+    #[serde(default)]
+    pub textures: BTreeMap<String, Spanned<TextureDesc>>,
     /// `[materials.NAME]`.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialDesc>,
@@ -287,13 +290,21 @@ pub struct MaterialDesc {
     /// Specular lobe.
     pub model: Option<ModelName>,
     /// Ambient reflectance.
-    pub ambient: Option<Spanned<Vec3Desc>>,
+    pub ambient: Option<Spanned<ParamDesc>>,
     /// Diffuse albedo.
-    pub diffuse: Option<Spanned<Vec3Desc>>,
+    pub diffuse: Option<Spanned<ParamDesc>>,
     /// Specular reflectance.
-    pub specular: Option<Spanned<Vec3Desc>>,
+    pub specular: Option<Spanned<ParamDesc>>,
     /// Phong exponent.
-    pub shininess: Option<Spanned<f64>>,
+    pub shininess: Option<Spanned<ParamDesc>>,
+    /// Tangent-space normal map (a texture).
+    pub normal_map: Option<Spanned<ParamDesc>>,
+    /// Scale of the normal map's x and y.
+    pub normal_scale: Option<Spanned<f64>>,
+    /// Alpha cutout mask (a scalar texture).
+    pub alpha: Option<Spanned<ParamDesc>>,
+    /// Mask values below it are holes.
+    pub alpha_cutoff: Option<Spanned<f64>>,
     /// `[materials.NAME.mirror]`.
     pub mirror: Option<Spanned<MirrorDesc>>,
     /// `[materials.NAME.dielectric]`.
@@ -309,9 +320,9 @@ pub struct MaterialDesc {
 #[serde(deny_unknown_fields)]
 pub struct MirrorDesc {
     /// Fraction of the colour taken from the reflected ray.
-    pub reflectivity: Option<Spanned<f64>>,
+    pub reflectivity: Option<Spanned<ParamDesc>>,
     /// Colour filter on the reflection.
-    pub tint: Option<Spanned<Vec3Desc>>,
+    pub tint: Option<Spanned<ParamDesc>>,
 }
 
 /// `[materials.NAME.dielectric]`.
@@ -321,9 +332,9 @@ pub struct DielectricDesc {
     /// Index of refraction of the inside.
     pub ior: Option<Spanned<f64>>,
     /// Colour filter on transmitted light.
-    pub tint: Option<Spanned<Vec3Desc>>,
+    pub tint: Option<Spanned<ParamDesc>>,
     /// GGX roughness (0: smooth).
-    pub roughness: Option<Spanned<f64>>,
+    pub roughness: Option<Spanned<ParamDesc>>,
     /// Fresnel formula.
     pub fresnel: Option<FresnelName>,
 }
@@ -349,7 +360,7 @@ pub struct ConductorDesc {
     /// Extinction coefficient, per channel.
     pub k: Option<Spanned<Vec3Desc>>,
     /// GGX roughness (0: smooth).
-    pub roughness: Option<Spanned<f64>>,
+    pub roughness: Option<Spanned<ParamDesc>>,
 }
 
 /// `[materials.NAME.coating]`.
@@ -426,6 +437,83 @@ pub struct ObjectDesc {
     pub waves: Option<Spanned<Vec<WaveDesc>>>,
     /// Water: grid cells `[along x, along z]`.
     pub resolution: Option<Spanned<Vec2Desc>>,
+}
+
+/// `[textures.NAME]`, or a texture written inline as a parameter's value:
+/// the keys of every texture type (the loader checks which apply to `type`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDesc {
+    /// `"image"` or `"checkerboard"`.
+    #[serde(rename = "type")]
+    pub kind: Spanned<TextureKind>,
+    /// Image: the file (relative to the scene file).
+    pub file: Option<Spanned<String>>,
+    /// Image: `"srgb"` or `"linear"` (default: sRGB for colours, linear for data).
+    pub colour_space: Option<Spanned<String>>,
+    /// Image: `"repeat"`, `"clamp"`, `"mirror"`, or `[along u, along v]`.
+    pub wrap: Option<Spanned<WrapDesc>>,
+    /// Image: `"bilinear"` or `"nearest"`.
+    pub filter: Option<Spanned<String>>,
+    /// Image: multiplies the colour (a number or `[r, g, b]`).
+    pub factor: Option<Spanned<ScaleDesc>>,
+    /// Image: which channel a scalar parameter reads.
+    pub channel: Option<Spanned<String>>,
+    /// Checkerboard: the colour of the squares at the origin.
+    #[serde(alias = "color0")]
+    pub colour0: Option<Spanned<Vec3Desc>>,
+    /// Checkerboard: the other colour.
+    #[serde(alias = "color1")]
+    pub colour1: Option<Spanned<Vec3Desc>>,
+    /// UV scale: one number or `[u, v]`.
+    pub scale: Option<Spanned<Scale2Desc>>,
+    /// UV rotation in degrees, counter-clockwise.
+    pub rotation: Option<Spanned<f64>>,
+    /// UV offset `[u, v]`.
+    pub offset: Option<Spanned<Vec2Desc>>,
+}
+
+/// Texture type names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TextureKind {
+    /// `"image"`.
+    Image,
+    /// `"checkerboard"`.
+    Checkerboard,
+}
+
+/// A wrap mode for both axes, or one per axis.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum WrapDesc {
+    /// The same mode along u and v.
+    Both(String),
+    /// `[along u, along v]`.
+    PerAxis([String; 2]),
+}
+
+/// A uniform UV scale or one per axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scale2Desc {
+    /// The same factor along u and v.
+    Uniform(f64),
+    /// `[u, v]`.
+    PerAxis([f64; 2]),
+}
+
+/// A material parameter's value: a number, a colour, the name of a
+/// `[textures]` entry, or an inline texture table.
+#[derive(Debug)]
+pub enum ParamDesc {
+    /// A number (a scalar, or a grey colour).
+    Number(f64),
+    /// `[r, g, b]`.
+    Colour([f64; 3]),
+    /// A key of `[textures]`.
+    Texture(String),
+    /// A texture described in place.
+    Inline(Box<TextureDesc>),
 }
 
 /// An array of exactly three numbers (integers or floats; validity is
@@ -515,5 +603,65 @@ impl<'de> Visitor<'de> for ScaleVisitor {
 impl<'de> Deserialize<'de> for ScaleDesc {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         d.deserialize_any(ScaleVisitor)
+    }
+}
+
+struct Scale2Visitor;
+
+impl<'de> Visitor<'de> for Scale2Visitor {
+    type Value = Scale2Desc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a number or an array of 2 numbers")
+    }
+    fn visit_f64<E: de::Error>(self, x: f64) -> Result<Scale2Desc, E> {
+        Ok(Scale2Desc::Uniform(x))
+    }
+    fn visit_i64<E: de::Error>(self, x: i64) -> Result<Scale2Desc, E> {
+        Ok(Scale2Desc::Uniform(x as f64))
+    }
+    fn visit_u64<E: de::Error>(self, x: u64) -> Result<Scale2Desc, E> {
+        Ok(Scale2Desc::Uniform(x as f64))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale2Desc, A::Error> {
+        visit_numbers::<A, 2>(seq).map(Scale2Desc::PerAxis)
+    }
+}
+
+impl<'de> Deserialize<'de> for Scale2Desc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(Scale2Visitor)
+    }
+}
+
+struct ParamVisitor;
+
+impl<'de> Visitor<'de> for ParamVisitor {
+    type Value = ParamDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a number, an array of 3 numbers, a texture name or a texture table")
+    }
+    fn visit_f64<E: de::Error>(self, x: f64) -> Result<ParamDesc, E> {
+        Ok(ParamDesc::Number(x))
+    }
+    fn visit_i64<E: de::Error>(self, x: i64) -> Result<ParamDesc, E> {
+        Ok(ParamDesc::Number(x as f64))
+    }
+    fn visit_u64<E: de::Error>(self, x: u64) -> Result<ParamDesc, E> {
+        Ok(ParamDesc::Number(x as f64))
+    }
+    fn visit_str<E: de::Error>(self, s: &str) -> Result<ParamDesc, E> {
+        Ok(ParamDesc::Texture(s.to_string()))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ParamDesc, A::Error> {
+        visit_numbers::<A, 3>(seq).map(ParamDesc::Colour)
+    }
+    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<ParamDesc, A::Error> {
+        TextureDesc::deserialize(de::value::MapAccessDeserializer::new(map)).map(|t| ParamDesc::Inline(Box::new(t)))
+    }
+}
+
+impl<'de> Deserialize<'de> for ParamDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(ParamVisitor)
     }
 }

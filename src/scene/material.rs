@@ -1,7 +1,11 @@
 //! Surface materials: a Phong or Blinn-Phong surface, optionally mixed with a
-//! mirror reflection, or a dielectric (glass, water).
+//! mirror reflection, or a dielectric (glass, water), a metal or a coated
+//! diffuse; any colour, roughness and weight may be a texture
+//! ([`MaterialTextures`]), evaluated at a shading point by [`Material::at`].
 
-use crate::math::Vec3A;
+use crate::math::{Vec2, Vec3A};
+use crate::texture::Texture;
+use std::borrow::Cow;
 
 /// Which specular lobe the local model uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,6 +104,99 @@ pub struct Material {
     pub conductor: Option<Conductor>,
     /// Optional clear coating over the diffuse albedo.
     pub coating: Option<Coating>,
+    /// Textures that replace the constant values above at shading points,
+    /// a normal map and an alpha cutout.
+    pub textures: MaterialTextures,
+}
+
+/// A tangent-space normal map (`n = 2·rgb − 1`, linear data), on the
+/// tangent frame of the shading point (the mesh's tangents, else `∂p/∂u`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalMap {
+    /// The map.
+    pub texture: Texture,
+    /// Scales the map's x and y (glTF's `normalTexture.scale`).
+    pub scale: f32,
+}
+
+/// An alpha cutout: rays pass through where the mask is below `cutoff`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlphaMask {
+    /// The mask (a scalar texture: its channel is part of it).
+    pub texture: Texture,
+    /// Values below it are holes.
+    pub cutoff: f32,
+}
+
+impl AlphaMask {
+    /// True when the surface is present at `uv`.
+    #[inline]
+    pub fn opaque_at(&self, uv: Vec2) -> bool {
+        self.texture.eval_scalar(uv) >= self.cutoff
+    }
+}
+
+/// The textured parameters of a material; `None` keeps the constant value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialTextures {
+    /// Replaces [`Material::ambient`].
+    pub ambient: Option<Texture>,
+    /// Replaces [`Material::diffuse`].
+    pub diffuse: Option<Texture>,
+    /// Replaces [`Material::specular`].
+    pub specular: Option<Texture>,
+    /// Replaces [`Material::shininess`] (scalar).
+    pub shininess: Option<Texture>,
+    /// Replaces the mirror's reflectivity (scalar).
+    pub mirror_reflectivity: Option<Texture>,
+    /// Replaces the mirror's tint.
+    pub mirror_tint: Option<Texture>,
+    /// Replaces the dielectric's tint.
+    pub dielectric_tint: Option<Texture>,
+    /// Replaces the dielectric's roughness (scalar).
+    pub dielectric_roughness: Option<Texture>,
+    /// Replaces the conductor's roughness (scalar).
+    pub conductor_roughness: Option<Texture>,
+    /// Perturbs the shading normal.
+    pub normal_map: Option<NormalMap>,
+    /// Cuts holes.
+    pub alpha: Option<AlphaMask>,
+}
+
+impl MaterialTextures {
+    /// True when some parameter's value depends on the shading point.
+    pub fn has_values(&self) -> bool {
+        self.values().next().is_some()
+    }
+
+    /// The value textures that are set, with their parameter names.
+    pub fn values(&self) -> impl Iterator<Item = (&'static str, &Texture)> {
+        [
+            ("ambient", &self.ambient),
+            ("diffuse", &self.diffuse),
+            ("specular", &self.specular),
+            ("shininess", &self.shininess),
+            ("mirror.reflectivity", &self.mirror_reflectivity),
+            ("mirror.tint", &self.mirror_tint),
+            ("dielectric.tint", &self.dielectric_tint),
+            ("dielectric.roughness", &self.dielectric_roughness),
+            ("conductor.roughness", &self.conductor_roughness),
+        ]
+        .into_iter()
+        .filter_map(|(name, t)| t.as_ref().map(|t| (name, t)))
+    }
+
+    /// Every texture, the normal map's and the mask's included.
+    pub fn all(&self) -> impl Iterator<Item = (&'static str, &Texture)> {
+        self.values()
+            .chain(self.normal_map.as_ref().map(|n| ("normal_map", &n.texture)))
+            .chain(self.alpha.as_ref().map(|a| ("alpha", &a.texture)))
+    }
+
+    /// True when the material reads texture coordinates.
+    pub fn uses_uv(&self) -> bool {
+        self.all().any(|(_, t)| !t.is_constant())
+    }
 }
 
 impl Material {
@@ -116,15 +213,64 @@ impl Material {
             dielectric: None,
             conductor: None,
             coating: None,
+            textures: MaterialTextures::default(),
         }
+    }
+
+    /// The material's values at texture coordinates `uv`: itself when no
+    /// value is textured, else an unnamed, untextured copy with every
+    /// textured parameter looked up (what the BSDF and the Whitted
+    /// integrator read at a shading point).
+    #[inline]
+    pub fn at(&self, uv: Vec2) -> Cow<'_, Material> {
+        if !self.textures.has_values() {
+            return Cow::Borrowed(self);
+        }
+        let t = &self.textures;
+        let colour = |tex: &Option<Texture>, value: Vec3A| tex.as_ref().map_or(value, |t| t.eval(uv));
+        let scalar = |tex: &Option<Texture>, value: f32| tex.as_ref().map_or(value, |t| t.eval_scalar(uv));
+        Cow::Owned(Material {
+            name: String::new(),
+            model: self.model,
+            ambient: colour(&t.ambient, self.ambient),
+            diffuse: colour(&t.diffuse, self.diffuse),
+            specular: colour(&t.specular, self.specular),
+            shininess: scalar(&t.shininess, self.shininess),
+            mirror: self.mirror.map(|m| Mirror {
+                reflectivity: scalar(&t.mirror_reflectivity, m.reflectivity).clamp(0.0, 1.0),
+                tint: colour(&t.mirror_tint, m.tint),
+            }),
+            dielectric: self.dielectric.map(|d| Dielectric {
+                tint: colour(&t.dielectric_tint, d.tint),
+                roughness: scalar(&t.dielectric_roughness, d.roughness).max(0.0),
+                ..d
+            }),
+            conductor: self.conductor.map(|c| Conductor {
+                roughness: scalar(&t.conductor_roughness, c.roughness).max(0.0),
+                ..c
+            }),
+            coating: self.coating,
+            textures: MaterialTextures::default(),
+        })
     }
 
     /// True when rays continue through this surface (mirror or dielectric):
     /// such objects cast caustics and need secondary rays.
     pub fn is_specular(&self) -> bool {
+        let t = &self.textures;
+        let smooth_somewhere = |tex: &Option<Texture>, value: f32| match tex {
+            None => value == 0.0,
+            // A textured roughness may be 0 somewhere unless it is constant.
+            Some(Texture::Constant(c)) => c.x <= 0.0,
+            Some(_) => true,
+        };
         self.dielectric.is_some()
-            || self.mirror.is_some_and(|m| m.reflectivity > 0.0)
-            || self.conductor.is_some_and(|c| c.roughness == 0.0)
+            || self.mirror.is_some_and(|m| {
+                m.reflectivity > 0.0 || t.mirror_reflectivity.as_ref().is_some_and(|r| r.max_value().x > 0.0)
+            })
+            || self
+                .conductor
+                .is_some_and(|c| smooth_somewhere(&t.conductor_roughness, c.roughness))
     }
 
     /// True when the Whitted integrator follows a reflected or refracted ray
@@ -136,9 +282,15 @@ impl Material {
     /// True when the surface has a diffuse part that receives direct light
     /// and photons.
     pub fn is_diffuse(&self) -> bool {
+        let diffuse = self.textures.diffuse.as_ref().map_or(self.diffuse, |t| t.max_value());
+        let reflectivity_min = match &self.textures.mirror_reflectivity {
+            None => self.mirror.map_or(0.0, |m| m.reflectivity),
+            Some(Texture::Constant(c)) => c.x,
+            Some(_) => 0.0,
+        };
         self.dielectric.is_none()
             && self.conductor.is_none()
-            && self.diffuse.max_element() > 0.0
-            && self.mirror.is_none_or(|m| m.reflectivity < 1.0)
+            && diffuse.max_element() > 0.0
+            && (self.mirror.is_none() || reflectivity_min < 1.0)
     }
 }

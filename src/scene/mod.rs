@@ -3,6 +3,7 @@
 //! into shading data.
 
 pub mod camera;
+pub mod cutout;
 pub mod desc;
 pub mod light;
 pub mod load;
@@ -13,15 +14,19 @@ pub mod metals;
 use crate::film::denoise::DenoiseQuality;
 pub use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::{Hit, TriangleTest};
-use crate::math::{Aabb, Ray, SamplerKind, Transform, Vec3A};
+use crate::math::{Aabb, Ray, SamplerKind, Transform, Vec2, Vec3A, Vec4};
 use std::sync::Arc;
 
 pub use crate::geometry::{Mesh, Quad, Sphere};
 pub use crate::geometry::{WaterSurface, Wave};
 pub use camera::Camera;
+pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_scene, parse_scene, SceneError};
-pub use material::{Coating, Conductor, Dielectric, FresnelModel, Material, Mirror, ShadingModel};
+pub use material::{
+    AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, Mirror, NormalMap,
+    ShadingModel,
+};
 pub use medium::Medium;
 
 /// How secondary work is shared between a pixel's samples.
@@ -297,8 +302,16 @@ pub struct SurfaceInteraction {
     pub p_error: Vec3A,
     /// Unit geometric normal (outward for closed shapes; not flipped toward the ray).
     pub ng: Vec3A,
-    /// Unit shading normal, on the same side as `ng`.
+    /// Unit shading normal, on the same side as `ng` (normal-mapped where
+    /// the material has a normal map).
     pub ns: Vec3A,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// `∂p/∂u` (world space; the tangent that anisotropy and normal maps
+    /// follow).
+    pub dpdu: Vec3A,
+    /// `∂p/∂v` (world space).
+    pub dpdv: Vec3A,
     /// Ray parameter of the hit.
     pub t: f32,
     /// Object index.
@@ -338,14 +351,19 @@ impl Scene {
     /// `(t, instance, prim, u, v)`, and this is the one place that interprets it.
     pub fn surface_interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let object = &self.objects[hit.instance as usize];
-        let (p, p_error, ng, ns) = match &object.shape {
+        let material = &self.materials[object.material as usize];
+        let normal_map = material.textures.normal_map.as_ref();
+        // The mesh's interpolated tangent, when it has tangents and a normal map reads them.
+        let mut tangent: Option<Vec4> = None;
+        let (p, p_error, ng, ns, uv, dpdu, dpdv) = match &object.shape {
             Shape::Sphere(s) => {
                 let (p, n, err) = s.surface(ray, hit.t);
-                (p, err, n, n)
+                let (uv, dpdu, dpdv) = s.uv(p);
+                (p, err, n, n, uv, dpdu, dpdv)
             }
             Shape::Quad(q) => {
                 let (p, err) = q.surface(hit.u, hit.v);
-                (p, err, q.normal, q.normal)
+                (p, err, q.normal, q.normal, Vec2::new(hit.u, hit.v), q.u, q.v)
             }
             Shape::Mesh {
                 mesh,
@@ -353,8 +371,9 @@ impl Scene {
                 smooth,
             } => {
                 let mesh = &self.meshes[*mesh as usize];
-                let tri = mesh.triangles[hit.prim as usize];
-                let [p0, p1, p2] = mesh.corners(hit.prim as usize);
+                let prim = hit.prim as usize;
+                let tri = mesh.triangles[prim];
+                let [p0, p1, p2] = mesh.corners(prim);
                 let (b1, b2) = (hit.u, hit.v);
                 let b0 = 1.0 - b1 - b2;
                 // Barycentric reconstruction: error γ(7)Σ|bᵢpᵢ| (pbrt-v4 §6.8.5).
@@ -374,7 +393,48 @@ impl Scene {
                 } else {
                     ng
                 };
-                (transform.point(p_obj), transform.point_error(p_obj, err_obj), ng, ns)
+                let [t0, t1, t2] = mesh.corner_uvs(prim);
+                let uv = t0 * b0 + t1 * b1 + t2 * b2;
+                // ∂p/∂u and ∂p/∂v from the triangle's edges and UV
+                // differences (pbrt-v4 §6.5.3), any frame when degenerate.
+                let (duv02, duv12) = (t0 - t2, t1 - t2);
+                let (dp02, dp12) = (p0 - p2, p1 - p2);
+                let det = duv02.x * duv12.y - duv02.y * duv12.x;
+                let (dpdu, dpdv) = if det.abs() < 1e-12 {
+                    let f = crate::math::Frame::from_normal(ng_obj.normalize_or(Vec3A::Z));
+                    (f.to_world(Vec3A::X), f.to_world(Vec3A::Y))
+                } else {
+                    let inv = 1.0 / det;
+                    (
+                        (dp02 * duv12.y - dp12 * duv02.y) * inv,
+                        (dp12 * duv02.x - dp02 * duv12.x) * inv,
+                    )
+                };
+                if normal_map.is_some() && !mesh.tangents.is_empty() {
+                    let t = |i: u32| mesh.tangents[i as usize];
+                    let sign = t(tri[0]).w;
+                    let xyz = t(tri[0]).truncate() * b0 + t(tri[1]).truncate() * b1 + t(tri[2]).truncate() * b2;
+                    tangent = Some(Vec4::from((transform.vector(Vec3A::from(xyz)), sign)));
+                }
+                (
+                    transform.point(p_obj),
+                    transform.point_error(p_obj, err_obj),
+                    ng,
+                    ns,
+                    uv,
+                    transform.vector(dpdu),
+                    transform.vector(dpdv),
+                )
+            }
+        };
+        let ns = match normal_map {
+            None => ns,
+            Some(map) => {
+                let (t, sign) = match tangent {
+                    Some(t) => (Vec3A::from(t.truncate()), t.w),
+                    None => (dpdu, 1.0),
+                };
+                perturbed_normal(ns, ng, t, sign, map, uv)
             }
         };
         SurfaceInteraction {
@@ -382,9 +442,31 @@ impl Scene {
             p_error,
             ng,
             ns,
+            uv,
+            dpdu,
+            dpdv,
             t: hit.t,
             object: hit.instance,
             material: object.material,
         }
+    }
+}
+
+/// The shading normal `ns` bent by a tangent-space normal map: the map's
+/// `n = 2·rgb − 1` (x, y scaled) on the frame `(t, b, ns)`, `t` the tangent
+/// made orthogonal to `ns` (Gram–Schmidt) and `b = sign · ns × t`, as
+/// Mitsuba's `normalmap` and glTF's tangent space. The result is kept on
+/// `ng`'s side.
+fn perturbed_normal(ns: Vec3A, ng: Vec3A, tangent: Vec3A, sign: f32, map: &material::NormalMap, uv: Vec2) -> Vec3A {
+    let t = (tangent - ns * ns.dot(tangent)).try_normalize();
+    let Some(t) = t else { return ns };
+    let b = ns.cross(t) * sign;
+    let m = map.texture.eval(uv) * 2.0 - Vec3A::ONE;
+    let n = (t * (m.x * map.scale) + b * (m.y * map.scale) + ns * m.z).normalize_or(ns);
+    if n.dot(ng) * ns.dot(ng) < 0.0 {
+        // A map bending the normal past the surface: keep the surface's side.
+        (n - ng * (2.0 * n.dot(ng))).normalize_or(ns)
+    } else {
+        n
     }
 }

@@ -4,7 +4,8 @@
 
 use super::sys;
 use crate::math::{Aabb, Ray, Vec3A};
-use crate::scene::{Quad, Sphere};
+use crate::scene::{Cutouts, Quad, Sphere};
+use std::sync::Arc;
 
 /// An analytic shape in the TLAS (user geometry data).
 #[derive(Clone, Copy, Debug)]
@@ -31,16 +32,37 @@ impl AnalyticShape {
     }
 }
 
+/// A user geometry's data: the shape, its object index and the scene's
+/// alpha cutouts when its material has a mask.
+#[derive(Debug)]
+pub(super) struct AnalyticGeometry {
+    pub(super) shape: AnalyticShape,
+    pub(super) object: u32,
+    pub(super) cutouts: Option<Arc<Cutouts>>,
+}
+
+impl AnalyticGeometry {
+    /// `(t, u, v)` of the nearest hit on the surface (holes skipped).
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        match (&self.cutouts, &self.shape) {
+            (None, shape) => shape.intersect(ray, t_max),
+            (Some(c), AnalyticShape::Sphere(s)) => c.sphere(self.object, s, ray, t_max).map(|t| (t, 0.0, 0.0)),
+            (Some(c), AnalyticShape::Quad(q)) => c.quad(self.object, q, ray, t_max),
+        }
+    }
+}
+
 /// `RTCBoundsFunction`: the shape's box, widened by a few ulps of its
 /// magnitude so rounding in the corner sums cannot cull a hit on the boundary.
 pub(super) unsafe extern "C" fn analytic_bounds(args: *const sys::RTCBoundsFunctionArguments) {
     // SAFETY: Embree passes valid arguments; `geometryUserPtr` is the
-    // `AnalyticShape` kept alive by the scene; `bounds_o` is writable.
-    let (shape, out) = unsafe {
+    // `AnalyticGeometry` kept alive by the scene; `bounds_o` is writable.
+    let (geometry, out) = unsafe {
         let args = &*args;
-        (&*(args.geometryUserPtr as *const AnalyticShape), &mut *args.bounds_o)
+        (&*(args.geometryUserPtr as *const AnalyticGeometry), &mut *args.bounds_o)
     };
-    let b = shape.bounds();
+    let b = geometry.shape.bounds();
     let pad = (b.min.abs().max(b.max.abs())) * (4.0 * f32::EPSILON) + Vec3A::splat(f32::MIN_POSITIVE);
     let (lo, hi) = (b.min - pad, b.max + pad);
     *out = sys::RTCBounds {
@@ -77,10 +99,10 @@ unsafe fn read_ray_n(base: *const f32, n: usize, i: usize) -> (Ray, f32, f32) {
 pub(super) unsafe extern "C" fn analytic_intersect(args: *const sys::RTCIntersectFunctionNArguments) {
     // SAFETY: Embree passes valid arguments: `valid` has `N` entries,
     // `rayhit` is an RTCRayHitN with `N` lanes (ray: floats 0..12N, hit:
-    // from float 12N), and `geometryUserPtr` is our live `AnalyticShape`.
+    // from float 12N), and `geometryUserPtr` is our live `AnalyticGeometry`.
     unsafe {
         let args = &*args;
-        let shape = &*(args.geometryUserPtr as *const AnalyticShape);
+        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let n = args.N as usize;
         let base = args.rayhit as *mut f32;
         for i in 0..n {
@@ -116,7 +138,7 @@ pub(super) unsafe extern "C" fn analytic_occluded(args: *const sys::RTCOccludedF
     // SAFETY: as in `analytic_intersect`, with `ray` an RTCRayN of `N` lanes.
     unsafe {
         let args = &*args;
-        let shape = &*(args.geometryUserPtr as *const AnalyticShape);
+        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let n = args.N as usize;
         let base = args.ray as *mut f32;
         for i in 0..n {
@@ -128,6 +150,34 @@ pub(super) unsafe extern "C" fn analytic_occluded(args: *const sys::RTCOccludedF
                 if t >= tnear {
                     *base.add(8 * n + i) = f32::NEG_INFINITY;
                 }
+            }
+        }
+    }
+}
+
+/// `RTCFilterFunctionN` of triangle geometries whose instances may have an
+/// alpha mask: rejects the hits that fall in a hole (for closest-hit and
+/// any-hit queries alike). The instance (the object) comes from the hit's
+/// `instID[0]`, so one BLAS shared by masked and unmasked objects works.
+pub(super) unsafe extern "C" fn cutout_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments: `valid` has `N` entries, `hit`
+    // is an RTCHitN of `N` lanes (u at float 3N, v at 4N, primID at 5N,
+    // instID[0] at 7N), and `geometryUserPtr` is the `Cutouts` the BLAS
+    // geometry keeps alive.
+    unsafe {
+        let args = &*args;
+        let cutouts = &*(args.geometryUserPtr as *const Cutouts);
+        let n = args.N as usize;
+        let hit = args.hit as *const f32;
+        let ids = hit as *const u32;
+        for i in 0..n {
+            if *args.valid.add(i) == 0 {
+                continue;
+            }
+            let (u, v) = (*hit.add(3 * n + i), *hit.add(4 * n + i));
+            let (prim, object) = (*ids.add(5 * n + i), *ids.add(7 * n + i));
+            if !cutouts.keeps_triangle(object, prim, u, v) {
+                *args.valid.add(i) = 0;
             }
         }
     }

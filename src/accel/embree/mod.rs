@@ -54,8 +54,8 @@ pub use scene::{CommittedScene, Geometry, Scene};
 use super::triangle::WatertightRay;
 use super::{Accel, AccelError, AccelOptions, AccelStats, Hit};
 use crate::math::{Ray, Transform, Vec3A};
-use crate::scene::{Mesh, Scene as CausticScene, Shape};
-use analytic::AnalyticShape;
+use crate::scene::{Cutouts, Mesh, Scene as CausticScene, Shape};
+use analytic::{AnalyticGeometry, AnalyticShape};
 use device::version_string;
 use query::hit_record;
 use std::sync::Arc;
@@ -99,6 +99,18 @@ impl EmbreeAccel {
                 scene.objects.len()
             )));
         }
+        let cutouts = Cutouts::of(scene);
+        // Meshes that some masked object uses get the cutout filter.
+        let mut masked = vec![false; scene.meshes.len()];
+        for (i, object) in scene.objects.iter().enumerate() {
+            if let (Shape::Mesh { mesh, .. }, Some(c)) = (&object.shape, &cutouts) {
+                if c.has(i as u32) {
+                    if let Some(m) = masked.get_mut(*mesh as usize) {
+                        *m = true;
+                    }
+                }
+            }
+        }
         // One BLAS per distinct mesh that some object uses.
         let mut blas_of_mesh: Vec<Option<usize>> = vec![None; scene.meshes.len()];
         let mut blas = Vec::new();
@@ -114,7 +126,8 @@ impl EmbreeAccel {
                 };
                 if blas_of_mesh[index].is_none() {
                     let mut bottom = Scene::new(&device, quality, options.embree_robust)?;
-                    bottom.attach(Geometry::triangles(&device, mesh_arc, quality)?, 0)?;
+                    let filter = cutouts.as_ref().filter(|_| masked[index]);
+                    bottom.attach(Geometry::triangles(&device, mesh_arc, quality, filter)?, 0)?;
                     blas_of_mesh[index] = Some(blas.len());
                     blas.push(bottom.commit()?);
                 }
@@ -122,9 +135,14 @@ impl EmbreeAccel {
         }
         let mut top = Scene::new(&device, quality, options.embree_robust)?;
         for (id, object) in scene.objects.iter().enumerate() {
+            let analytic = |shape| {
+                let object = id as u32;
+                let cutouts = cutouts.clone().filter(|c| c.has(object));
+                Geometry::analytic(&device, AnalyticGeometry { shape, object, cutouts })
+            };
             let geometry = match &object.shape {
-                Shape::Sphere(s) => Geometry::analytic(&device, AnalyticShape::Sphere(*s))?,
-                Shape::Quad(q) => Geometry::analytic(&device, AnalyticShape::Quad(*q))?,
+                Shape::Sphere(s) => analytic(AnalyticShape::Sphere(*s))?,
+                Shape::Quad(q) => analytic(AnalyticShape::Quad(*q))?,
                 Shape::Mesh { mesh, transform, .. } => {
                     let b = blas_of_mesh[*mesh as usize].expect("BLAS built above for every used mesh");
                     Geometry::instance(&device, &blas[b], &transform.to_world)?

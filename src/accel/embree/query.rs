@@ -179,7 +179,7 @@ mod tests {
         );
         let mut blas = Scene::new(&device, sys::RTC_BUILD_QUALITY_HIGH, false).unwrap();
         blas.attach(
-            Geometry::triangles(&device, &mesh, sys::RTC_BUILD_QUALITY_HIGH).unwrap(),
+            Geometry::triangles(&device, &mesh, sys::RTC_BUILD_QUALITY_HIGH, None).unwrap(),
             0,
         )
         .unwrap();

@@ -2,12 +2,12 @@
 //! user geometries) with what Embree reads from them kept alive, attached to
 //! scenes that are then committed.
 
-use super::analytic::{analytic_bounds, analytic_intersect, analytic_occluded, AnalyticShape};
+use super::analytic::{analytic_bounds, analytic_intersect, analytic_occluded, cutout_filter, AnalyticGeometry};
 use super::device::{Device, DeviceInner};
 use super::sys;
 use crate::accel::AccelError;
 use crate::math::Affine3A;
-use crate::scene::Mesh;
+use crate::scene::{Cutouts, Mesh};
 use std::ffi::c_void;
 use std::sync::Arc;
 
@@ -17,7 +17,9 @@ enum KeepAlive {
     /// A mesh whose index buffer is shared with Embree.
     Mesh(#[allow(dead_code)] Arc<Mesh>),
     /// User data of an analytic-shape geometry.
-    Shape(#[allow(dead_code)] Arc<AnalyticShape>),
+    Shape(#[allow(dead_code)] Arc<AnalyticGeometry>),
+    /// User data of a triangle geometry's alpha-cutout filter.
+    Cutouts(#[allow(dead_code)] Arc<Cutouts>),
     /// A BLAS referenced by an instance.
     Scene(#[allow(dead_code)] Arc<SceneHandle>),
 }
@@ -69,7 +71,15 @@ impl Geometry {
     /// non-finite coordinates, which Embree's build skips (it drops every
     /// primitive with a non-finite vertex), so primitive IDs stay the mesh's
     /// triangle indices.
-    pub fn triangles(device: &Device, mesh: &Arc<Mesh>, quality: sys::RTCBuildQuality) -> Result<Self, AccelError> {
+    ///
+    /// With `cutouts`, hits are filtered through the objects' alpha masks
+    /// (an intersection filter for both query kinds).
+    pub fn triangles(
+        device: &Device,
+        mesh: &Arc<Mesh>,
+        quality: sys::RTCBuildQuality,
+        cutouts: Option<&Arc<Cutouts>>,
+    ) -> Result<Self, AccelError> {
         let name = &mesh.name;
         let vertex_count = mesh.positions.len();
         let tri_count = mesh.triangles.len();
@@ -150,6 +160,18 @@ impl Geometry {
         }
         // SAFETY: live geometry; the quality is one of the sys constants.
         unsafe { sys::rtcSetGeometryBuildQuality(geometry.raw, quality) };
+        if let Some(cutouts) = cutouts {
+            let user_ptr = Arc::as_ptr(cutouts) as *mut c_void;
+            // SAFETY: live geometry; `user_ptr` stays valid because the Arc
+            // is kept by this geometry and then by the scene it is attached
+            // to; the filter only reads through it.
+            unsafe {
+                sys::rtcSetGeometryUserData(geometry.raw, user_ptr);
+                sys::rtcSetGeometryIntersectFilterFunction(geometry.raw, Some(cutout_filter));
+                sys::rtcSetGeometryOccludedFilterFunction(geometry.raw, Some(cutout_filter));
+            }
+            geometry.keep.push(KeepAlive::Cutouts(cutouts.clone()));
+        }
         geometry.keep.push(KeepAlive::Mesh(mesh.clone()));
         geometry.commit(&format!("triangle geometry of mesh {name}"))?;
         Ok(geometry)
@@ -182,7 +204,7 @@ impl Geometry {
 
     /// A user geometry with one primitive: `shape`, intersected by the
     /// scene's own analytic code.
-    pub(super) fn analytic(device: &Device, shape: AnalyticShape) -> Result<Self, AccelError> {
+    pub(super) fn analytic(device: &Device, shape: AnalyticGeometry) -> Result<Self, AccelError> {
         let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_USER)?;
         let shape = Arc::new(shape);
         let user_ptr = Arc::as_ptr(&shape) as *mut c_void;
@@ -226,7 +248,8 @@ impl Drop for SceneHandle {
 }
 
 // SAFETY: Embree scenes are thread-safe for queries after commit, and the
-// kept data is immutable (Arc<Mesh>, Arc<AnalyticShape>, Arc<SceneHandle>).
+// kept data is immutable (Arc<Mesh>, Arc<AnalyticGeometry>, Arc<Cutouts>,
+// Arc<SceneHandle>).
 unsafe impl Send for SceneHandle {}
 // SAFETY: see `Send`; only committed scenes (CommittedScene) are shared.
 unsafe impl Sync for SceneHandle {}

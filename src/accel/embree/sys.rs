@@ -194,6 +194,22 @@ pub struct RTCOccludedFunctionNArguments {
     pub geomID: u32,
 }
 
+/// `struct RTCFilterFunctionNArguments`: `ray` is an `RTCRayN` and `hit`
+/// an `RTCHitN` of `N` lanes (structure of arrays); setting `valid[i]` to 0
+/// rejects lane `i`'s hit.
+#[repr(C)]
+pub struct RTCFilterFunctionNArguments {
+    pub valid: *mut i32,
+    pub geometryUserPtr: *mut c_void,
+    pub context: *mut c_void,
+    pub ray: *mut c_void,
+    pub hit: *mut c_void,
+    pub N: u32,
+}
+
+/// `RTCFilterFunctionN`.
+pub type RTCFilterFunctionN = Option<unsafe extern "C" fn(args: *const RTCFilterFunctionNArguments)>;
+
 /// `RTCErrorFunction`.
 pub type RTCErrorFunction = Option<unsafe extern "C" fn(user_ptr: *mut c_void, code: RTCError, message: *const c_char)>;
 /// `RTCMemoryMonitorFunction`: `bytes > 0` allocates, `< 0` frees; return
@@ -260,6 +276,8 @@ extern "C" {
     pub fn rtcSetGeometryBoundsFunction(geometry: RTCGeometry, bounds: RTCBoundsFunction, user_ptr: *mut c_void);
     pub fn rtcSetGeometryIntersectFunction(geometry: RTCGeometry, intersect: RTCIntersectFunctionN);
     pub fn rtcSetGeometryOccludedFunction(geometry: RTCGeometry, occluded: RTCOccludedFunctionN);
+    pub fn rtcSetGeometryIntersectFilterFunction(geometry: RTCGeometry, filter: RTCFilterFunctionN);
+    pub fn rtcSetGeometryOccludedFilterFunction(geometry: RTCGeometry, filter: RTCFilterFunctionN);
 }
 
 #[cfg(test)]

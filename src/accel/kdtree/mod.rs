@@ -27,7 +27,7 @@ use self::node::{widen, KdTree, LeafResult, TreeShape};
 use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3, Vec3A};
-use crate::scene::{Mesh, Quad, Scene, Shape, Sphere};
+use crate::scene::{Cutouts, Mesh, Quad, Scene, Shape, Sphere};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -49,6 +49,8 @@ pub struct KdTreeAccel {
     /// One tree per entry of `meshes` (empty for meshes no object uses).
     blas: Vec<Blas>,
     test: TriangleTest,
+    /// Alpha masks, when some material has one.
+    cutouts: Option<Arc<Cutouts>>,
     build_time: Duration,
 }
 
@@ -165,6 +167,7 @@ impl KdTreeAccel {
             meshes: scene.meshes.clone(),
             blas,
             test: options.triangle_test,
+            cutouts: Cutouts::of(scene),
             build_time: start.elapsed(),
         }
     }
@@ -196,7 +199,11 @@ impl KdTreeAccel {
     fn test_object(&self, ray: &Ray, instance: u32, limit: &mut f32, any: bool, found: &mut impl FnMut(Hit, &mut f32)) {
         match &self.objects[instance as usize] {
             TopObject::Sphere(s) => {
-                if let Some(t) = s.intersect(ray, *limit) {
+                let t = match &self.cutouts {
+                    Some(c) => c.sphere(instance, s, ray, *limit),
+                    None => s.intersect(ray, *limit),
+                };
+                if let Some(t) = t {
                     let hit = Hit {
                         t,
                         instance,
@@ -208,7 +215,11 @@ impl KdTreeAccel {
                 }
             }
             TopObject::Quad(q) => {
-                if let Some((t, u, v)) = q.intersect(ray, *limit) {
+                let h = match &self.cutouts {
+                    Some(c) => c.quad(instance, q, ray, *limit),
+                    None => q.intersect(ray, *limit),
+                };
+                if let Some((t, u, v)) = h {
                     found(
                         Hit {
                             t,
@@ -227,6 +238,7 @@ impl KdTreeAccel {
                 let watertight = WatertightRay::new(&local);
                 let test = self.test;
                 let start_limit = *limit;
+                let cutouts = self.cutouts.as_ref().filter(|c| c.has(instance));
                 let leaf = |range: Range<usize>| {
                     for tri in &blas.tris[range] {
                         let prim = tri.prim;
@@ -235,7 +247,10 @@ impl KdTreeAccel {
                             TriangleTest::Watertight => watertight.intersect(p0, p1, p2, *limit),
                             TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, *limit),
                         };
-                        if let Some((t, u, v)) = result {
+                        let kept = |&(_, u, v): &(f32, f32, f32)| {
+                            cutouts.is_none_or(|c| c.keeps_triangle(instance, prim, u, v))
+                        };
+                        if let Some((t, u, v)) = result.filter(kept) {
                             found(
                                 Hit {
                                     t,
@@ -266,15 +281,27 @@ impl KdTreeAccel {
     /// Re-tests one primitive of one object below `limit` (tie resolution).
     fn test_prim(&self, ray: &Ray, instance: u32, prim: u32, limit: f32) -> Option<(f32, f32, f32)> {
         match &self.objects[instance as usize] {
-            TopObject::Sphere(s) => s.intersect(ray, limit).map(|t| (t, 0.0, 0.0)),
-            TopObject::Quad(q) => q.intersect(ray, limit),
+            TopObject::Sphere(s) => match &self.cutouts {
+                Some(c) => c.sphere(instance, s, ray, limit),
+                None => s.intersect(ray, limit),
+            }
+            .map(|t| (t, 0.0, 0.0)),
+            TopObject::Quad(q) => match &self.cutouts {
+                Some(c) => c.quad(instance, q, ray, limit),
+                None => q.intersect(ray, limit),
+            },
             TopObject::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
                 let [p0, p1, p2] = self.meshes[*mesh as usize].corners(prim as usize);
-                match self.test {
+                let hit = match self.test {
                     TriangleTest::Watertight => WatertightRay::new(&local).intersect(p0, p1, p2, limit),
                     TriangleTest::MollerTrumbore => moller_trumbore(&local, p0, p1, p2, limit),
-                }
+                };
+                hit.filter(|&(_, u, v)| {
+                    self.cutouts
+                        .as_ref()
+                        .is_none_or(|c| c.keeps_triangle(instance, prim, u, v))
+                })
             }
         }
     }

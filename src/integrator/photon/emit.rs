@@ -419,7 +419,7 @@ impl<'a> PhotonTracer<'a> {
             path.power *= fog::transmittance(m, &ray, hit.t);
         }
         let si = self.scene.surface_interaction(&ray, &hit);
-        let m = &self.scene.materials[si.material as usize];
+        let m = &*self.scene.materials[si.material as usize].at(si.uv);
         let dir = if let Some(d) = m.dielectric {
             if path.bounces >= self.max_depth {
                 return Step::Done;
@@ -531,7 +531,7 @@ impl PhotonTracer<'_> {
             return Step::Done;
         };
         let si = self.scene.surface_interaction(&ray, &hit);
-        let m = &self.scene.materials[si.material as usize];
+        let m = &*self.scene.materials[si.material as usize].at(si.uv);
         let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance);
         if bsdf.is_black() {
             return Step::Done;

@@ -4,9 +4,13 @@
 
 use super::error::{Place, SceneError};
 use crate::math::Vec3A;
-use crate::scene::desc::{Spanned, Vec2Desc, Vec3Desc};
+use crate::scene::desc::{Spanned, TextureDesc, Vec2Desc, Vec3Desc};
+use crate::texture::{ColourSpace, Image};
+use std::cell::RefCell;
+use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Largest magnitude of a coordinate, length or colour: squares of such
 /// values stay finite in single precision (1e36 < 3.4e38).
@@ -16,6 +20,10 @@ pub const MAX_MAGNITUDE: f64 = 1e18;
 pub(super) struct Ctx<'a> {
     pub(super) text: &'a str,
     pub(super) path: &'a Path,
+    /// The `[textures]` table.
+    pub(super) textures: &'a BTreeMap<String, Spanned<TextureDesc>>,
+    /// Images decoded so far, by canonical path and colour space.
+    pub(super) images: RefCell<HashMap<(PathBuf, ColourSpace), Arc<Image>>>,
 }
 
 impl Ctx<'_> {
@@ -93,25 +101,6 @@ impl Ctx<'_> {
         let c = self.vec3(s, key)?;
         if c.min_element() < 0.0 {
             return Err(self.invalid(s.span(), format!("`{key}` has a negative component: colours are ≥ 0")));
-        }
-        Ok(c)
-    }
-
-    /// A reflectance: a colour with components in [0, 1] (a surface cannot
-    /// reflect more light than it receives).
-    pub(super) fn reflectance(
-        &self,
-        s: &Option<Spanned<Vec3Desc>>,
-        key: &str,
-        default: Vec3A,
-    ) -> Result<Vec3A, SceneError> {
-        let Some(s) = s else { return Ok(default) };
-        let c = self.colour(s, key)?;
-        if c.max_element() > 1.0 {
-            return Err(self.invalid(
-                s.span(),
-                format!("`{key}` has a component above 1: reflectances are in [0, 1]"),
-            ));
         }
         Ok(c)
     }

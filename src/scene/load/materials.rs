@@ -3,10 +3,13 @@
 
 use super::ctx::Ctx;
 use super::error::SceneError;
+use super::textures::Usage;
 use crate::math::Vec3A;
-use crate::scene::desc::{FresnelName, MaterialDesc, ModelName, Spanned};
+use crate::scene::desc::{FresnelName, MaterialDesc, ModelName, ParamDesc, Spanned};
+use crate::scene::material::{AlphaMask, MaterialTextures, NormalMap};
 use crate::scene::metals;
 use crate::scene::{Coating, Conductor, Dielectric, FresnelModel, Material, Mirror, ShadingModel};
+use crate::texture::Texture;
 use std::collections::BTreeMap;
 
 /// Default diffuse albedo of a material.
@@ -37,34 +40,34 @@ impl Ctx<'_> {
         } else {
             Vec3A::splat(DEFAULT_DIFFUSE)
         };
-        let diffuse = self.reflectance(&m.diffuse, "diffuse", default_diffuse)?;
-        let ambient = self.reflectance(&m.ambient, "ambient", diffuse)?;
-        let specular = self.reflectance(&m.specular, "specular", Vec3A::ZERO)?;
-        let shininess = match &m.shininess {
-            None => DEFAULT_SHININESS,
-            Some(s) => {
-                let n = self.number(s, "shininess")?;
-                if n <= 0.0 {
-                    return Err(self.invalid(s.span(), format!("`shininess` = {n} must be > 0")));
-                }
-                n
-            }
+        let mut textures = MaterialTextures::default();
+        let (diffuse, diffuse_tex) = self.colour_param(&m.diffuse, "diffuse", default_diffuse, Some(1.0))?;
+        // The ambient reflectance follows the diffuse albedo, texture included.
+        let (ambient, ambient_tex) = match &m.ambient {
+            None => (diffuse, diffuse_tex.clone()),
+            a => self.colour_param(a, "ambient", diffuse, Some(1.0))?,
         };
+        let (specular, specular_tex) = self.colour_param(&m.specular, "specular", Vec3A::ZERO, Some(1.0))?;
+        let (shininess, shininess_tex) =
+            self.scalar_param(&m.shininess, "shininess", DEFAULT_SHININESS, ("> 0", |n| n > 0.0))?;
+        (
+            textures.diffuse,
+            textures.ambient,
+            textures.specular,
+            textures.shininess,
+        ) = (diffuse_tex, ambient_tex, specular_tex, shininess_tex);
         let mirror = match &m.mirror {
             None => None,
             Some(s) => {
                 let d = s.get_ref();
-                let reflectivity = match &d.reflectivity {
-                    None => 1.0,
-                    Some(r) => {
-                        let x = self.number(r, "reflectivity")?;
-                        if !(0.0..=1.0).contains(&x) {
-                            return Err(self.invalid(r.span(), format!("`reflectivity` = {x} must be in [0, 1]")));
-                        }
-                        x
-                    }
-                };
-                let tint = self.reflectance(&d.tint, "tint", Vec3A::ONE)?;
+                let (reflectivity, reflectivity_tex) = self.scalar_param(
+                    &d.reflectivity,
+                    "reflectivity",
+                    1.0,
+                    ("in [0, 1]", |x| (0.0..=1.0).contains(&x)),
+                )?;
+                let (tint, tint_tex) = self.colour_param(&d.tint, "tint", Vec3A::ONE, Some(1.0))?;
+                (textures.mirror_reflectivity, textures.mirror_tint) = (reflectivity_tex, tint_tex);
                 Some(Mirror { reflectivity, tint })
             }
         };
@@ -91,11 +94,13 @@ impl Ctx<'_> {
                         x
                     }
                 };
-                let tint = self.reflectance(&d.tint, "tint", Vec3A::ONE)?;
+                let (tint, tint_tex) = self.colour_param(&d.tint, "tint", Vec3A::ONE, Some(1.0))?;
+                let (roughness, roughness_tex) = self.roughness(&d.roughness)?;
+                (textures.dielectric_tint, textures.dielectric_roughness) = (tint_tex, roughness_tex);
                 Some(Dielectric {
                     ior,
                     tint,
-                    roughness: self.roughness(&d.roughness)?,
+                    roughness,
                     fresnel: d.fresnel.map(|f| match f {
                         FresnelName::Exact => FresnelModel::Exact,
                         FresnelName::Schlick => FresnelModel::Schlick,
@@ -142,11 +147,9 @@ impl Ctx<'_> {
                             "a conductor needs either `metal` (gold, silver, copper, aluminium) or both `eta` and `k`",
                         )),
                     };
-                Some(Conductor {
-                    eta,
-                    k,
-                    roughness: self.roughness(&c.roughness)?,
-                })
+                let (roughness, roughness_tex) = self.roughness(&c.roughness)?;
+                textures.conductor_roughness = roughness_tex;
+                Some(Conductor { eta, k, roughness })
             }
         };
         let coating = match &m.coating {
@@ -175,7 +178,40 @@ impl Ctx<'_> {
                 Some(Coating { ior })
             }
         };
+        if let Some(n) = &m.normal_map {
+            let scale = match &m.normal_scale {
+                None => 1.0,
+                Some(s) => self.number(s, "normal_scale")?,
+            };
+            textures.normal_map = Some(NormalMap {
+                texture: self.texture_param(n, "normal_map", Usage::Normal)?,
+                scale,
+            });
+        } else if let Some(s) = &m.normal_scale {
+            return Err(self.invalid(s.span(), "`normal_scale` without a `normal_map`"));
+        }
+        if let Some(a) = &m.alpha {
+            let cutoff = match &m.alpha_cutoff {
+                None => 0.5,
+                Some(s) => {
+                    let x = self.number(s, "alpha_cutoff")?;
+                    if !(0.0..=1.0).contains(&x) {
+                        return Err(self.invalid(s.span(), format!("`alpha_cutoff` = {x} must be in [0, 1]")));
+                    }
+                    x
+                }
+            };
+            let texture = match a.get_ref() {
+                // A constant alpha is a surface that is there or not.
+                ParamDesc::Number(x) => Texture::scalar(self.check_finite(*x, a.span(), "alpha")?),
+                _ => self.texture_param(a, "alpha", Usage::Alpha)?,
+            };
+            textures.alpha = Some(AlphaMask { texture, cutoff });
+        } else if let Some(s) = &m.alpha_cutoff {
+            return Err(self.invalid(s.span(), "`alpha_cutoff` without an `alpha` mask"));
+        }
         Ok(Material {
+            textures,
             name: name.into(),
             model: match m.model {
                 None | Some(ModelName::BlinnPhong) => ShadingModel::BlinnPhong,
@@ -192,18 +228,9 @@ impl Ctx<'_> {
         })
     }
 
-    /// GGX roughness `alpha` in [0, 1] (0 when absent: smooth).
-    fn roughness(&self, r: &Option<Spanned<f64>>) -> Result<f32, SceneError> {
-        match r {
-            None => Ok(0.0),
-            Some(s) => {
-                let x = self.number(s, "roughness")?;
-                if !(0.0..=1.0).contains(&x) {
-                    return Err(self.invalid(s.span(), format!("`roughness` = {x} must be in [0, 1]")));
-                }
-                Ok(x)
-            }
-        }
+    /// GGX roughness `alpha` in [0, 1] (0 when absent: smooth), or a texture.
+    fn roughness(&self, r: &Option<Spanned<ParamDesc>>) -> Result<(f32, Option<Texture>), SceneError> {
+        self.scalar_param(r, "roughness", 0.0, ("in [0, 1]", |x| (0.0..=1.0).contains(&x)))
     }
 
     /// Refuses `component` next to any of `others` that is present.

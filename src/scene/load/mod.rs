@@ -23,6 +23,7 @@ mod lights;
 mod materials;
 mod objects;
 mod settings;
+mod textures;
 
 pub use ctx::MAX_MAGNITUDE;
 pub use error::{Place, SceneError};
@@ -79,13 +80,18 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 /// Parses and validates scene text. `path` names the file in messages, and
 /// relative mesh paths are resolved against its directory.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let ctx = Ctx { text, path };
     let desc: SceneDesc = toml::from_str(text).map_err(|e| SceneError::Toml {
         path: path.into(),
         place: e.span().map(|s| Place::of_offset(text, s.start)),
         // One line, like every other message (toml puts the expectation on a second line).
         message: e.message().trim().lines().map(str::trim).collect::<Vec<_>>().join(": "),
     })?;
+    let ctx = Ctx {
+        text,
+        path,
+        textures: &desc.textures,
+        images: Default::default(),
+    };
     let mut settings = ctx.render(&desc.render)?;
     settings.photons = ctx.photons(&desc.photons)?;
     let camera = ctx.camera(&desc.camera)?;
@@ -152,6 +158,22 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
             *index = meshes.len() as u32;
         }
         meshes.push(Arc::new(mesh));
+    }
+    // A normal map needs a tangent frame from texture coordinates.
+    for (i, o) in objects.iter().enumerate() {
+        if let Shape::Mesh { mesh, .. } = &o.shape {
+            let material = &materials[o.material as usize];
+            let mesh = &meshes[*mesh as usize];
+            if material.textures.normal_map.is_some() && mesh.uvs.is_empty() && mesh.tangents.is_empty() {
+                return Err(ctx.invalid(
+                    desc.objects[i].material.span(),
+                    format!(
+                        "material `{}` has a normal map, but mesh `{}` has no texture coordinates to orient it",
+                        material.name, mesh.name
+                    ),
+                ));
+            }
+        }
     }
     let mut scene = Scene {
         settings,
