@@ -98,7 +98,26 @@ fn fingerprint_of(
         field("progressive photons", format!("alpha {:?}", p.alpha).as_bytes());
     }
     field("camera", format!("{:?}", scene.camera).as_bytes());
-    field("materials", format!("{:?}", scene.materials).as_bytes());
+    let materials: Vec<encoding::Material> = scene.materials.iter().map(encoding::Material::of).collect();
+    field("materials", format!("{materials:?}").as_bytes());
+    // Textures by content, only for the materials that have them (the
+    // fingerprint of an untextured scene is the one before textures existed).
+    for (i, m) in scene.materials.iter().enumerate() {
+        let t = &m.textures;
+        if t.all().next().is_some() {
+            let mut text = format!("material {i}:");
+            for (name, texture) in t.all() {
+                text += &format!(" {name} {}", encoding::texture(texture));
+            }
+            if let Some(n) = &t.normal_map {
+                text += &format!(" normal scale {:?}", n.scale);
+            }
+            if let Some(a) = &t.alpha {
+                text += &format!(" alpha cutoff {:?}", a.cutoff);
+            }
+            field("material textures", text.as_bytes());
+        }
+    }
     field("lights", format!("{:?}", scene.lights).as_bytes());
     field("objects", format!("{:?}", scene.objects).as_bytes());
     for mesh in &scene.meshes {
@@ -108,9 +127,138 @@ fn fingerprint_of(
         field("mesh vertices", &bytes);
         let bytes: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
         field("mesh triangles", &bytes);
+        if !mesh.uvs.is_empty() {
+            let bytes: Vec<u8> = mesh.uvs.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+            field("mesh uvs", &bytes);
+        }
+        if !mesh.tangents.is_empty() {
+            let bytes: Vec<u8> = mesh.tangents.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+            field("mesh tangents", &bytes);
+        }
     }
     field("accel", format!("{accel:?} {accel_options}").as_bytes());
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The fingerprint's own spelling of the materials: structs whose derived
+/// `Debug` text is the encoding, declared here so that renaming a field of
+/// the scene's types changes no fingerprint (a test pins the text).
+mod encoding {
+    use crate::math::Vec3A;
+    use crate::scene;
+    use crate::texture::Texture;
+
+    #[derive(Debug)]
+    pub(super) struct Material {
+        name: String,
+        model: Model,
+        ambient: Vec3A,
+        diffuse: Vec3A,
+        specular: Vec3A,
+        shininess: f32,
+        mirror: Option<Mirror>,
+        dielectric: Option<Dielectric>,
+        conductor: Option<Conductor>,
+        coating: Option<Coating>,
+    }
+
+    #[derive(Debug)]
+    enum Model {
+        Phong,
+        BlinnPhong,
+    }
+
+    #[derive(Debug)]
+    struct Mirror {
+        reflectivity: f32,
+        tint: Vec3A,
+    }
+
+    #[derive(Debug)]
+    struct Dielectric {
+        ior: f32,
+        tint: Vec3A,
+        roughness: f32,
+        fresnel: Option<Fresnel>,
+    }
+
+    #[derive(Debug)]
+    enum Fresnel {
+        Exact,
+        Schlick,
+    }
+
+    #[derive(Debug)]
+    struct Conductor {
+        eta: Vec3A,
+        k: Vec3A,
+        roughness: f32,
+    }
+
+    #[derive(Debug)]
+    struct Coating {
+        ior: f32,
+    }
+
+    impl Material {
+        pub(super) fn of(m: &scene::Material) -> Self {
+            Self {
+                name: m.name.clone(),
+                model: match m.model {
+                    scene::ShadingModel::Phong => Model::Phong,
+                    scene::ShadingModel::BlinnPhong => Model::BlinnPhong,
+                },
+                ambient: m.ambient,
+                diffuse: m.diffuse,
+                specular: m.specular,
+                shininess: m.shininess,
+                mirror: m.mirror.map(|x| Mirror {
+                    reflectivity: x.reflectivity,
+                    tint: x.tint,
+                }),
+                dielectric: m.dielectric.map(|d| Dielectric {
+                    ior: d.ior,
+                    tint: d.tint,
+                    roughness: d.roughness,
+                    fresnel: d.fresnel.map(|f| match f {
+                        scene::FresnelModel::Exact => Fresnel::Exact,
+                        scene::FresnelModel::Schlick => Fresnel::Schlick,
+                    }),
+                }),
+                conductor: m.conductor.map(|c| Conductor {
+                    eta: c.eta,
+                    k: c.k,
+                    roughness: c.roughness,
+                }),
+                coating: m.coating.map(|c| Coating { ior: c.ior }),
+            }
+        }
+    }
+
+    /// A texture by what it computes: an image by its texels' hash, never
+    /// by its path.
+    pub(super) fn texture(t: &Texture) -> String {
+        match t {
+            Texture::Constant(c) => format!("constant {:?}", c.to_array()),
+            Texture::Checkerboard(c) => format!(
+                "checkerboard {:?} {:?} uv {:?}",
+                c.colour0.to_array(),
+                c.colour1.to_array(),
+                c.transform.0.to_cols_array()
+            ),
+            Texture::Image(i) => format!(
+                "image {} uv {:?} wrap {} {} filter {} factor {:?} alpha {:?} channel {}",
+                i.image.hash.iter().map(|b| format!("{b:02x}")).collect::<String>(),
+                i.transform.0.to_cols_array(),
+                i.wrap[0].name(),
+                i.wrap[1].name(),
+                i.filter.name(),
+                i.factor.to_array(),
+                i.alpha_factor,
+                i.channel.name()
+            ),
+        }
+    }
 }
 
 /// What differs between a checkpoint's recorded settings and this run's, in
@@ -144,6 +292,45 @@ pub fn differences_between(then: &CheckpointMeta, then_label: &str, now: &Checkp
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The materials' encoding is pinned: a renamed field of the scene's
+    /// types must not change any fingerprint (checkpoints would stop resuming).
+    #[test]
+    fn material_encoding_is_stable() {
+        let m = crate::scene::Material {
+            mirror: Some(crate::scene::Mirror {
+                reflectivity: 0.5,
+                tint: crate::math::Vec3A::ONE,
+            }),
+            ..crate::scene::Material::diffuse("m", crate::math::Vec3A::splat(0.25))
+        };
+        assert_eq!(
+            format!("{:?}", encoding::Material::of(&m)),
+            "Material { name: \"m\", model: BlinnPhong, ambient: Vec3A(0.25, 0.25, 0.25), \
+             diffuse: Vec3A(0.25, 0.25, 0.25), specular: Vec3A(0.0, 0.0, 0.0), shininess: 1.0, \
+             mirror: Some(Mirror { reflectivity: 0.5, tint: Vec3A(1.0, 1.0, 1.0) }), dielectric: None, \
+             conductor: None, coating: None }"
+        );
+        let g = crate::scene::Material {
+            dielectric: Some(crate::scene::Dielectric::smooth(1.5, crate::math::Vec3A::ONE)),
+            conductor: Some(crate::scene::Conductor {
+                eta: crate::math::Vec3A::ONE,
+                k: crate::math::Vec3A::ZERO,
+                roughness: 0.1,
+            }),
+            coating: Some(crate::scene::Coating { ior: 1.4 }),
+            ..crate::scene::Material::diffuse("g", crate::math::Vec3A::ZERO)
+        };
+        let text = format!("{:?}", encoding::Material::of(&g));
+        assert!(
+            text.ends_with(
+                "dielectric: Some(Dielectric { ior: 1.5, tint: Vec3A(1.0, 1.0, 1.0), roughness: 0.0, fresnel: None }), \
+                 conductor: Some(Conductor { eta: Vec3A(1.0, 1.0, 1.0), k: Vec3A(0.0, 0.0, 0.0), roughness: 0.1 }), \
+                 coating: Some(Coating { ior: 1.4 }) }"
+            ),
+            "{text}"
+        );
+    }
 
     fn scene() -> Scene {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/shadow.toml");
@@ -187,6 +374,23 @@ mod tests {
         assert_ne!(base, progressive);
         s.settings.photons.alpha = 0.6;
         assert_ne!(progressive, fingerprint(&s, AccelKind::KdTree, ""));
+        // Textures change it by content, not by path.
+        let mut s = scene();
+        let image = |v: u8, name: &str| {
+            let texels = crate::texture::image::Texels::Rgba8 {
+                data: vec![[v, v, v, 255]; 4],
+                space: crate::texture::ColourSpace::Srgb,
+            };
+            std::sync::Arc::new(crate::texture::Image::new(name, 2, 2, texels))
+        };
+        let textured = |img| crate::texture::Texture::Image(crate::texture::ImageTexture::new(img));
+        s.materials[0].textures.diffuse = Some(textured(image(9, "a.png")));
+        let with_texture = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, with_texture);
+        s.materials[0].textures.diffuse = Some(textured(image(9, "elsewhere/b.png")));
+        assert_eq!(with_texture, fingerprint(&s, AccelKind::KdTree, ""));
+        s.materials[0].textures.diffuse = Some(textured(image(10, "a.png")));
+        assert_ne!(with_texture, fingerprint(&s, AccelKind::KdTree, ""));
         // The keys the text leaves out are found in it.
         let text = format!("{:?}", RenderSettings::default());
         assert!(text.contains(", progressive: false, alpha: 0.6666667 }"), "{text}");
