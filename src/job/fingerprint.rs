@@ -128,11 +128,21 @@ fn fingerprint_of(
         let bytes: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
         field("mesh triangles", &bytes);
         if !mesh.uvs.is_empty() {
-            let bytes: Vec<u8> = mesh.uvs.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+            let bytes: Vec<u8> = mesh
+                .uvs
+                .iter()
+                .flat_map(|v| v.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
             field("mesh uvs", &bytes);
         }
         if !mesh.tangents.is_empty() {
-            let bytes: Vec<u8> = mesh.tangents.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+            let bytes: Vec<u8> = mesh
+                .tangents
+                .iter()
+                .flat_map(|v| v.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
             field("mesh tangents", &bytes);
         }
     }
@@ -143,6 +153,8 @@ fn fingerprint_of(
 /// The fingerprint's own spelling of the materials: structs whose derived
 /// `Debug` text is the encoding, declared here so that renaming a field of
 /// the scene's types changes no fingerprint (a test pins the text).
+// The fields are read through the derived `Debug` only.
+#[allow(dead_code)]
 mod encoding {
     use crate::math::Vec3A;
     use crate::scene;

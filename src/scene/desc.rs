@@ -459,12 +459,12 @@ pub struct TextureDesc {
     pub factor: Option<Spanned<ScaleDesc>>,
     /// Image: which channel a scalar parameter reads.
     pub channel: Option<Spanned<String>>,
-    /// Checkerboard: the colour of the squares at the origin.
+    /// Checkerboard: the colour (or number) of the squares at the origin.
     #[serde(alias = "color0")]
-    pub colour0: Option<Spanned<Vec3Desc>>,
-    /// Checkerboard: the other colour.
+    pub colour0: Option<Spanned<ScaleDesc>>,
+    /// Checkerboard: the other colour (or number).
     #[serde(alias = "color1")]
-    pub colour1: Option<Spanned<Vec3Desc>>,
+    pub colour1: Option<Spanned<ScaleDesc>>,
     /// UV scale: one number or `[u, v]`.
     pub scale: Option<Spanned<Scale2Desc>>,
     /// UV rotation in degrees, counter-clockwise.

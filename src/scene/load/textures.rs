@@ -236,13 +236,19 @@ impl Ctx<'_> {
         }
     }
 
-    fn opt_colour(
-        &self,
-        s: &Option<Spanned<crate::scene::desc::Vec3Desc>>,
-        key: &str,
-        default: Vec3A,
-    ) -> Result<Vec3A, SceneError> {
-        s.as_ref().map_or(Ok(default), |s| self.colour(s, key))
+    fn opt_colour(&self, s: &Option<Spanned<ScaleDesc>>, key: &str, default: Vec3A) -> Result<Vec3A, SceneError> {
+        let Some(s) = s else { return Ok(default) };
+        let c = match *s.get_ref() {
+            ScaleDesc::Uniform(x) => Vec3A::splat(self.check_finite(x, s.span(), key)?),
+            ScaleDesc::PerAxis([r, g, b]) => {
+                let f = |v| self.check_finite(v, s.span(), key);
+                Vec3A::new(f(r)?, f(g)?, f(b)?)
+            }
+        };
+        if c.min_element() < 0.0 {
+            return Err(self.invalid(s.span(), format!("`{key}` has a negative component: colours are ≥ 0")));
+        }
+        Ok(c)
     }
 
     fn uv_transform(&self, d: &TextureDesc) -> Result<UvTransform, SceneError> {
