@@ -112,6 +112,32 @@ fn scene_text(dir: &Path, text: &str) -> Run {
     Run::scene(write(dir, "scene.toml", text))
 }
 
+/// [`BASE`] plus a sphere whose material's `diffuse` is the image `file`;
+/// the `file` value is on line 15.
+fn texture_scene(file: &str) -> String {
+    format!(
+        "{BASE}[materials.tex]\ndiffuse = {{ type = \"image\", file = \"{file}\" }}\n\
+         [[objects]]\ntype = \"sphere\"\n{SPHERE}material = \"tex\"\n"
+    )
+}
+
+/// A PNG signature and an IHDR chunk announcing 100000 × 100000 RGBA texels.
+fn huge_png_header() -> Vec<u8> {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend_from_slice(&13u32.to_be_bytes());
+    png.extend_from_slice(&ihdr);
+    png.extend_from_slice(&flate2::Crc::new().sum().to_be_bytes());
+    let mut crc = flate2::Crc::new();
+    crc.update(&ihdr);
+    let n = png.len();
+    png[n - 4..].copy_from_slice(&crc.sum().to_be_bytes());
+    png
+}
+
 /// One hostile input.
 struct Case {
     /// Identifier, listed in `docs/hostile-inputs.md`.
@@ -557,6 +583,88 @@ fn cases() -> Vec<Case> {
             what: "PLY face element without `vertex_indices`",
             expect: Some(&[MESH_AT, "m.ply: the face element has no 'vertex_indices'"]),
             setup: |d| with_mesh(d, "m.ply", PLY_ASCII_HEADER.replace("vertex_indices", "corners") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+        },
+        // ------------------------------------------------------------ textures
+        Case {
+            name: "texture-missing",
+            what: "an image texture whose file does not exist",
+            expect: Some(&["scene.toml:15:", "texture `t.png`: cannot open"]),
+            setup: |d| scene_text(d, &texture_scene("t.png")),
+        },
+        Case {
+            name: "texture-not-an-image",
+            what: "a text file named `t.png`",
+            expect: Some(&["scene.toml:15:36: texture `t.png`: cannot decode", "Invalid PNG signature"]),
+            setup: |d| {
+                write(d, "t.png", "not an image");
+                scene_text(d, &texture_scene("t.png"))
+            },
+        },
+        Case {
+            name: "texture-truncated-png",
+            what: "a PNG cut in its pixel data",
+            expect: Some(&["scene.toml:15:", "texture `t.png`: cannot decode"]),
+            setup: |d| {
+                let mut png = Vec::new();
+                image::RgbImage::from_fn(64, 64, |x, y| image::Rgb([x as u8 * 4, y as u8 * 4, (x ^ y) as u8]))
+                    .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                    .unwrap();
+                write(d, "t.png", &png[..png.len() / 2]);
+                scene_text(d, &texture_scene("t.png"))
+            },
+        },
+        Case {
+            name: "texture-decompression-bomb",
+            what: "a PNG header announcing 100000 × 100000 texels",
+            expect: Some(&["scene.toml:15:", "texture `t.png`: refused", "textures are at most 32768×32768 texels"]),
+            setup: |d| {
+                write(d, "t.png", huge_png_header());
+                scene_text(d, &texture_scene("t.png"))
+            },
+        },
+        Case {
+            name: "texture-unknown-name",
+            what: "`diffuse = \"wood\"` with no `[textures.wood]`",
+            expect: Some(&["scene.toml:15:11: `diffuse` names the texture `wood`, which `[textures]` does not define"]),
+            setup: |d| {
+                scene_text(
+                    d,
+                    &format!("{BASE}[materials.tex]\ndiffuse = \"wood\"\n[[objects]]\ntype = \"sphere\"\n{SPHERE}material = \"tex\"\n"),
+                )
+            },
+        },
+        Case {
+            name: "normal-map-without-uvs",
+            what: "a normal map on a mesh with no texture coordinates",
+            expect: Some(&["scene.toml:19:12: material `tex` has a normal map, but mesh", "has no texture coordinates"]),
+            setup: |d| {
+                image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]))
+                    .save(d.join("n.png"))
+                    .unwrap();
+                write(d, "m.obj", OBJ_TRI);
+                scene_text(
+                    d,
+                    &format!(
+                        "{BASE}[materials.tex]\nnormal_map = {{ type = \"image\", file = \"n.png\" }}\n\
+                         [[objects]]\ntype = \"mesh\"\nfile = \"m.obj\"\nmaterial = \"tex\"\n"
+                    ),
+                )
+            },
+        },
+        Case {
+            name: "stoff-missing-texture-coordinates",
+            what: "STOFF vertex line without `s t`",
+            expect: Some(&[MESH_AT, "m.off: line 3: vertex 0: STOFF needs finite texture coordinates"]),
+            setup: |d| with_mesh(d, "m.off", "STOFF\n3 1 0\n0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n"),
+        },
+        Case {
+            name: "ply-nan-texture-coordinate",
+            what: "ASCII PLY with `u = nan`",
+            expect: Some(&[MESH_AT, "m.ply: line 13: vertex 1 of 3 has a non-finite value (NaN)"]),
+            setup: |d| {
+                let header = PLY_ASCII_HEADER.replace("property float z\n", "property float z\nproperty float u\nproperty float v\n");
+                with_mesh(d, "m.ply", header + "0 0 0 0 0\n1 0 0 nan 0\n0 1 0 0 1\n3 0 1 2\n")
+            },
         },
         Case {
             name: "obj-valid-reference",
