@@ -81,8 +81,8 @@ material = \"a\"
     );
     let scene = load(dir.path(), &text).unwrap();
     let a = &scene.materials[0];
-    let Some(Texture::Image(rb)) = &a.textures.diffuse else {
-        panic!("{:?}", a.textures.diffuse)
+    let Some(Texture::Image(rb)) = &a.textures.as_ref().unwrap().diffuse else {
+        panic!("{:?}", a.textures.as_ref().unwrap().diffuse)
     };
     assert_eq!(rb.wrap[0].name(), "clamp");
     assert_eq!(rb.wrap[1].name(), "mirror");
@@ -96,7 +96,7 @@ material = \"a\"
             ..
         }
     ));
-    let Some(Texture::Image(sh)) = &a.textures.shininess else {
+    let Some(Texture::Image(sh)) = &a.textures.as_ref().unwrap().shininess else {
         panic!()
     };
     assert_eq!(sh.channel, Channel::B);
@@ -108,15 +108,18 @@ material = \"a\"
         }
     ));
     // The ambient reflectance follows the diffuse texture.
-    assert_eq!(a.textures.ambient, a.textures.diffuse);
+    assert_eq!(
+        a.textures.as_ref().unwrap().ambient,
+        a.textures.as_ref().unwrap().diffuse
+    );
     // Constants stand for the texture's upper bound.
     assert_eq!(a.diffuse, Vec3A::new(0.5, 0.0, 0.5));
     let b = &scene.materials[1];
-    let alpha = b.textures.alpha.as_ref().unwrap();
+    let alpha = b.textures.as_ref().unwrap().alpha.as_ref().unwrap();
     assert_eq!(alpha.cutoff, 0.25);
     let Texture::Image(mask) = &alpha.texture else { panic!() };
     assert_eq!(mask.channel, Channel::A);
-    assert!(b.textures.conductor_roughness.is_some());
+    assert!(b.textures.as_ref().unwrap().conductor_roughness.is_some());
     // The looked-up values: the UV transform doubles u, clamping keeps the
     // right texel beyond u = 0.5.
     let at = |u: f32| a.at(Vec2::new(u, 0.5)).diffuse;
@@ -125,13 +128,15 @@ material = \"a\"
     assert!((at(0.9) - Vec3A::new(0.0, 0.0, 0.5)).length() < 1e-6, "{}", at(0.9));
 }
 
+/// Texture coordinates are computed where the material reads them (here a
+/// checkerboard), on every shape.
 #[test]
 fn texture_coordinates_on_every_shape() {
     let dir = image_dir();
     let text = format!(
         "{CAMERA}
 [materials.m]
-diffuse = 0.5
+diffuse = {{ type = \"checkerboard\" }}
 
 [[objects]]
 type = \"sphere\"

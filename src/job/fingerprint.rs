@@ -103,8 +103,7 @@ fn fingerprint_of(
     // Textures by content, only for the materials that have them (the
     // fingerprint of an untextured scene is the one before textures existed).
     for (i, m) in scene.materials.iter().enumerate() {
-        let t = &m.textures;
-        if t.all().next().is_some() {
+        if let Some(t) = m.textures.as_deref().filter(|t| t.all().next().is_some()) {
             let mut text = format!("material {i}:");
             for (name, texture) in t.all() {
                 text += &format!(" {name} {}", encoding::texture(texture));
@@ -396,12 +395,21 @@ mod tests {
             std::sync::Arc::new(crate::texture::Image::new(name, 2, 2, texels))
         };
         let textured = |img| crate::texture::Texture::Image(crate::texture::ImageTexture::new(img));
-        s.materials[0].textures.diffuse = Some(textured(image(9, "a.png")));
+        s.materials[0].textures = Some(Box::new(crate::scene::MaterialTextures {
+            diffuse: Some(textured(image(9, "a.png"))),
+            ..Default::default()
+        }));
         let with_texture = fingerprint(&s, AccelKind::KdTree, "");
         assert_ne!(base, with_texture);
-        s.materials[0].textures.diffuse = Some(textured(image(9, "elsewhere/b.png")));
+        s.materials[0].textures = Some(Box::new(crate::scene::MaterialTextures {
+            diffuse: Some(textured(image(9, "elsewhere/b.png"))),
+            ..Default::default()
+        }));
         assert_eq!(with_texture, fingerprint(&s, AccelKind::KdTree, ""));
-        s.materials[0].textures.diffuse = Some(textured(image(10, "a.png")));
+        s.materials[0].textures = Some(Box::new(crate::scene::MaterialTextures {
+            diffuse: Some(textured(image(10, "a.png"))),
+            ..Default::default()
+        }));
         assert_ne!(with_texture, fingerprint(&s, AccelKind::KdTree, ""));
         // The keys the text leaves out are found in it.
         let text = format!("{:?}", RenderSettings::default());

@@ -30,7 +30,7 @@ impl Cutouts {
             .objects
             .iter()
             .map(|o| {
-                let mask = scene.materials[o.material as usize].textures.alpha.clone()?;
+                let mask = scene.materials[o.material as usize].textures.as_ref()?.alpha.clone()?;
                 let mesh = match &o.shape {
                     Shape::Mesh { mesh, .. } => Some(scene.meshes[*mesh as usize].clone()),
                     _ => None,

@@ -105,8 +105,9 @@ pub struct Material {
     /// Optional clear coating over the diffuse albedo.
     pub coating: Option<Coating>,
     /// Textures that replace the constant values above at shading points,
-    /// a normal map and an alpha cutout.
-    pub textures: MaterialTextures,
+    /// a normal map and an alpha cutout; `None` for an untextured material
+    /// (one test on the hot paths).
+    pub textures: Option<Box<MaterialTextures>>,
 }
 
 /// A tangent-space normal map (`n = 2·rgb − 1`, linear data), on the
@@ -165,8 +166,9 @@ pub struct MaterialTextures {
 
 impl MaterialTextures {
     /// True when some parameter's value depends on the shading point.
+    #[inline]
     pub fn has_values(&self) -> bool {
-        self.values().next().is_some()
+        self.has_any() && self.values().next().is_some()
     }
 
     /// The value textures that are set, with their parameter names.
@@ -193,9 +195,27 @@ impl MaterialTextures {
             .chain(self.alpha.as_ref().map(|a| ("alpha", &a.texture)))
     }
 
-    /// True when the material reads texture coordinates.
+    /// True when the material reads texture coordinates or the tangent
+    /// (`SurfaceInteraction::uv`, `dpdu`, `dpdv` are computed only then).
+    #[inline]
     pub fn uses_uv(&self) -> bool {
-        self.all().any(|(_, t)| !t.is_constant())
+        self.has_any() && self.all().any(|(_, t)| !t.is_constant()) || self.normal_map.is_some()
+    }
+
+    /// True when any texture is set (a cheap test for the hot paths).
+    #[inline]
+    pub fn has_any(&self) -> bool {
+        self.ambient.is_some()
+            || self.diffuse.is_some()
+            || self.specular.is_some()
+            || self.shininess.is_some()
+            || self.mirror_reflectivity.is_some()
+            || self.mirror_tint.is_some()
+            || self.dielectric_tint.is_some()
+            || self.dielectric_roughness.is_some()
+            || self.conductor_roughness.is_some()
+            || self.normal_map.is_some()
+            || self.alpha.is_some()
     }
 }
 
@@ -213,7 +233,7 @@ impl Material {
             dielectric: None,
             conductor: None,
             coating: None,
-            textures: MaterialTextures::default(),
+            textures: None,
         }
     }
 
@@ -223,10 +243,9 @@ impl Material {
     /// integrator read at a shading point).
     #[inline]
     pub fn at(&self, uv: Vec2) -> Cow<'_, Material> {
-        if !self.textures.has_values() {
+        let Some(t) = self.textures.as_deref().filter(|t| t.has_values()) else {
             return Cow::Borrowed(self);
-        }
-        let t = &self.textures;
+        };
         let colour = |tex: &Option<Texture>, value: Vec3A| tex.as_ref().map_or(value, |t| t.eval(uv));
         let scalar = |tex: &Option<Texture>, value: f32| tex.as_ref().map_or(value, |t| t.eval_scalar(uv));
         Cow::Owned(Material {
@@ -250,14 +269,15 @@ impl Material {
                 ..c
             }),
             coating: self.coating,
-            textures: MaterialTextures::default(),
+            textures: None,
         })
     }
 
     /// True when rays continue through this surface (mirror or dielectric):
     /// such objects cast caustics and need secondary rays.
     pub fn is_specular(&self) -> bool {
-        let t = &self.textures;
+        let none = MaterialTextures::default();
+        let t = self.textures.as_deref().unwrap_or(&none);
         let smooth_somewhere = |tex: &Option<Texture>, value: f32| match tex {
             None => value == 0.0,
             // A textured roughness may be 0 somewhere unless it is constant.
@@ -282,8 +302,11 @@ impl Material {
     /// True when the surface has a diffuse part that receives direct light
     /// and photons.
     pub fn is_diffuse(&self) -> bool {
-        let diffuse = self.textures.diffuse.as_ref().map_or(self.diffuse, |t| t.max_value());
-        let reflectivity_min = match &self.textures.mirror_reflectivity {
+        let t = self.textures.as_deref();
+        let diffuse = t
+            .and_then(|t| t.diffuse.as_ref())
+            .map_or(self.diffuse, |t| t.max_value());
+        let reflectivity_min = match t.and_then(|t| t.mirror_reflectivity.as_ref()) {
             None => self.mirror.map_or(0.0, |m| m.reflectivity),
             Some(Texture::Constant(c)) => c.x,
             Some(_) => 0.0,

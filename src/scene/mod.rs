@@ -305,10 +305,10 @@ pub struct SurfaceInteraction {
     /// Unit shading normal, on the same side as `ng` (normal-mapped where
     /// the material has a normal map).
     pub ns: Vec3A,
-    /// Texture coordinates.
+    /// Texture coordinates. Like `dpdu` and `dpdv`, computed only where the
+    /// material reads them ([`MaterialTextures::uses_uv`]); zero elsewhere.
     pub uv: Vec2,
-    /// `∂p/∂u` (world space; the tangent that anisotropy and normal maps
-    /// follow).
+    /// `∂p/∂u` (world space; the tangent that normal maps follow).
     pub dpdu: Vec3A,
     /// `∂p/∂v` (world space).
     pub dpdv: Vec3A,
@@ -335,6 +335,21 @@ impl Scene {
         (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(self.object_bounds(i)))
     }
 
+    /// The distinct images the materials' textures read.
+    pub fn texture_images(&self) -> Vec<Arc<crate::texture::Image>> {
+        let mut out: Vec<Arc<crate::texture::Image>> = Vec::new();
+        for m in &self.materials {
+            for (_, t) in m.textures.iter().flat_map(|t| t.all()) {
+                if let Some(image) = t.image() {
+                    if !out.iter().any(|o| Arc::ptr_eq(o, image)) {
+                        out.push(image.clone());
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// Number of triangles the objects reference, counting every instance.
     pub fn instanced_triangles(&self) -> u64 {
         self.objects
@@ -352,13 +367,20 @@ impl Scene {
     pub fn surface_interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let object = &self.objects[hit.instance as usize];
         let material = &self.materials[object.material as usize];
-        let normal_map = material.textures.normal_map.as_ref();
+        let textures = material.textures.as_deref();
+        let normal_map = textures.and_then(|t| t.normal_map.as_ref());
+        // The parametrisation costs trigonometry on spheres: only when read.
+        let wants_uv = textures.is_some_and(|t| t.uses_uv());
         // The mesh's interpolated tangent, when it has tangents and a normal map reads them.
         let mut tangent: Option<Vec4> = None;
         let (p, p_error, ng, ns, uv, dpdu, dpdv) = match &object.shape {
             Shape::Sphere(s) => {
                 let (p, n, err) = s.surface(ray, hit.t);
-                let (uv, dpdu, dpdv) = s.uv(p);
+                let (uv, dpdu, dpdv) = if wants_uv {
+                    s.uv(p)
+                } else {
+                    (Vec2::ZERO, Vec3A::ZERO, Vec3A::ZERO)
+                };
                 (p, err, n, n, uv, dpdu, dpdv)
             }
             Shape::Quad(q) => {

@@ -41,13 +41,25 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
             .filter(|o| matches!(o.shape, scene::Shape::Mesh { .. }))
             .count()
     );
+    let mesh_bytes: usize = scene.meshes.iter().map(|m| m.memory_bytes()).sum();
+    let with_uvs = scene.meshes.iter().filter(|m| !m.uvs.is_empty()).count();
     println!(
-        "meshes      {} distinct, {} triangles ({} instanced)",
+        "meshes      {} distinct, {} triangles ({} instanced), {:.1} MiB, {with_uvs} with texture coordinates",
         scene.meshes.len(),
         distinct,
-        scene.instanced_triangles()
+        scene.instanced_triangles(),
+        mesh_bytes as f64 / (1 << 20) as f64
     );
     println!("materials   {}", scene.materials.len());
+    let images = scene.texture_images();
+    if !images.is_empty() {
+        let bytes: usize = images.iter().map(|i| i.memory_bytes()).sum();
+        println!(
+            "textures    {} images, {:.1} MiB",
+            images.len(),
+            bytes as f64 / (1 << 20) as f64
+        );
+    }
     println!("lights      {}", scene.lights.len());
     println!(
         "bounds      [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",

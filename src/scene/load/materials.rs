@@ -211,7 +211,7 @@ impl Ctx<'_> {
             return Err(self.invalid(s.span(), "`alpha_cutoff` without an `alpha` mask"));
         }
         Ok(Material {
-            textures,
+            textures: textures.has_any().then(|| Box::new(textures)),
             name: name.into(),
             model: match m.model {
                 None | Some(ModelName::BlinnPhong) => ShadingModel::BlinnPhong,

@@ -164,7 +164,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         if let Shape::Mesh { mesh, .. } = &o.shape {
             let material = &materials[o.material as usize];
             let mesh = &meshes[*mesh as usize];
-            if material.textures.normal_map.is_some() && mesh.uvs.is_empty() && mesh.tangents.is_empty() {
+            if material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
+                && mesh.uvs.is_empty()
+                && mesh.tangents.is_empty()
+            {
                 return Err(ctx.invalid(
                     desc.objects[i].material.span(),
                     format!(
