@@ -1,8 +1,12 @@
 //! Denoising with Intel Open Image Denoise (OIDN, feature `denoise`): its
 //! `RT` filter on the linear HDR film, guided by the albedo and normal
-//! images (see `integrator::aov`). Those are noise-free in caustic (each
-//! sample follows perfect specular surfaces deterministically), so they are
-//! passed as clean auxiliaries and never prefiltered.
+//! images (see `integrator::aov`), followed by a correction that gives the
+//! filtered image the raw image's local mean ([`preserve_local_mean`]):
+//! the network removes outliers (caustic paths, the light's edges) with
+//! their energy, which darkened whole images by 1–2 % (docs/denoise.md).
+//! The guides are given as OIDN's ordinary (not `cleanAux`) auxiliaries:
+//! below a few dozen samples their antialiasing is itself noisy, and the
+//! clean-guide network measured a larger error there.
 //!
 //! OIDN's CPU device runs on TBB: Embree's when both are linked (the
 //! dynamic linker binds OIDN's TBB calls to the first TBB loaded, see
@@ -144,7 +148,8 @@ pub fn denoise(
         .flatten();
     // OIDN takes finite, non-negative HDR values; the film holds finite ones.
     let input = flatten(color, |v| if v.is_finite() { v.max(0.0) } else { 0.0 });
-    let output = run(&input, color.width, color.height, guides, quality)?;
+    let mut output = run(&input, color.width, color.height, guides, quality)?;
+    preserve_local_mean(&mut output, &input, color.width as usize, color.height as usize);
     let peak_memory = match (before, crate::memory::peak_rss_bytes()) {
         (Some(b), Some(p)) => Some(p.saturating_sub(b)),
         _ => None,
@@ -162,6 +167,85 @@ pub fn denoise(
             quality,
         },
     ))
+}
+
+/// Standard deviation, in pixels, of the window within which the denoised
+/// image keeps the raw image's light: wide enough that sharing out the raw
+/// image's outliers does not bring their noise back, narrow enough that the
+/// light stays where it was rendered (docs/denoise.md has the figures).
+pub const MEAN_WINDOW_SIGMA: f32 = 16.0;
+
+/// Gives back to `denoised` (interleaved RGB, `width × height`) the light
+/// the filter removed or added, where it was: each channel is multiplied by
+/// the ratio of the raw to the denoised image's local means, `d ⊙ Kr ⊘ Kd`,
+/// with `K` three box filters (a Gaussian of σ ≈ [`MEAN_WINDOW_SIGMA`]
+/// pixels, Wells 1986) mirrored at the image's border, then by the ratio of
+/// the channel's sums, which the local step leaves within a fraction of a
+/// percent of 1, so that the image's mean is the raw one's exactly. An image
+/// the filter left unbiased stays as it is; its detail stays in any case.
+pub fn preserve_local_mean(denoised: &mut [f32], raw: &[f32], width: usize, height: usize) {
+    assert_eq!(denoised.len(), raw.len());
+    assert_eq!(raw.len(), width * height * 3);
+    // Three boxes of 2r + 1 pixels: variance 3((2r + 1)² − 1)/12 = σ².
+    let radius = (((4.0 * MEAN_WINDOW_SIGMA * MEAN_WINDOW_SIGMA + 1.0).sqrt() - 1.0) / 2.0).round() as usize;
+    let smooth = |v: &mut [f64]| {
+        for _ in 0..3 {
+            box_sum(v, width, height, radius);
+        }
+    };
+    for c in 0..3 {
+        let channel = |v: &[f32]| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).collect::<Vec<f64>>();
+        let (d, r) = (channel(denoised), channel(raw));
+        let (mut kd, mut kr) = (d.clone(), r.clone());
+        smooth(&mut kd);
+        smooth(&mut kr);
+        // Kd = 0: nothing lit in the window, the pixel itself included.
+        let local: Vec<f64> = (0..d.len())
+            .map(|i| if kd[i] > 0.0 { d[i] * kr[i] / kd[i] } else { d[i] })
+            .collect();
+        let (total, want) = (local.iter().sum::<f64>(), r.iter().sum::<f64>());
+        let global = if total > 0.0 { want / total } else { 1.0 };
+        for (v, l) in denoised.iter_mut().skip(c).step_by(3).zip(local) {
+            *v = (l * global) as f32;
+        }
+    }
+}
+
+/// Sum over the `(2r + 1)²` box around each pixel, in place, the image
+/// mirrored at its border (pixel `−1 − i` is pixel `i`): a symmetric
+/// operator whose rows all sum to `(2r + 1)²`, so a uniform image stays
+/// uniform up to the border.
+fn box_sum(v: &mut [f64], width: usize, height: usize, r: usize) {
+    let mut prefix = Vec::new();
+    let mut pass = |v: &mut [f64], len: usize, count: usize, at: &dyn Fn(usize, usize) -> usize| {
+        // One reflection covers the window while r < len.
+        let r = r.min(len - 1) as isize;
+        let len_i = len as isize;
+        let mirror = |i: isize| {
+            if i < 0 {
+                -1 - i
+            } else if i >= len_i {
+                2 * len_i - 1 - i
+            } else {
+                i
+            }
+        };
+        for k in 0..count {
+            prefix.clear();
+            prefix.push(0.0);
+            let mut sum = 0.0;
+            for i in -r..len_i + r {
+                sum += v[at(k, mirror(i) as usize)];
+                prefix.push(sum);
+            }
+            let width = 2 * r as usize + 1;
+            for i in 0..len {
+                v[at(k, i)] = prefix[i + width] - prefix[i];
+            }
+        }
+    };
+    pass(v, width, height, &|y, x| y * width + x);
+    pass(v, height, width, &|x, y| y * width + x);
 }
 
 #[cfg(feature = "denoise")]
@@ -214,7 +298,10 @@ fn filter_with(
         )
     });
     if let Some((albedo, normal)) = &aux {
-        filter.albedo_normal(albedo, normal).clean_aux(true);
+        // Not `clean_aux`: the crate passes it under a name OIDN ignores
+        // ("clean_aux" for "cleanAux"), and the clean-guide network measured
+        // more error on caustic's guides below a few dozen spp (module doc).
+        filter.albedo_normal(albedo, normal);
     }
     let mut output = vec![0.0f32; input.len()];
     filter.filter(input, &mut output)?;
