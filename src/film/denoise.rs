@@ -391,6 +391,47 @@ mod tests {
         let _ = Rng::new(1, crate::math::rng::Domain::Analysis, 0, 0);
     }
 
+    /// An image the filter left as it was comes back unchanged.
+    #[test]
+    fn the_mean_correction_leaves_an_unbiased_image_alone() {
+        let (w, h) = (70usize, 50usize);
+        let mut rng = Rng::new(5, crate::math::rng::Domain::Analysis, 0, 0);
+        let raw: Vec<f32> = (0..w * h * 3).map(|_| rng.f32() * 3.0).collect();
+        let mut out = raw.clone();
+        preserve_local_mean(&mut out, &raw, w, h);
+        for (a, b) in out.iter().zip(&raw) {
+            assert!((a - b).abs() <= 1e-5 * b.max(1.0), "{a} ≠ {b}");
+        }
+    }
+
+    /// A firefly the filter removed gives its light back around its place:
+    /// the sums are the raw ones, pixels beyond the window (3 × 16 px) keep
+    /// their value, and the light went to the firefly's neighbourhood.
+    #[test]
+    fn the_mean_correction_gives_a_removed_fireflys_light_back_where_it_was() {
+        let (w, h) = (160usize, 120usize);
+        let at = |x: usize, y: usize| (y * w + x) * 3;
+        let mut raw = vec![0.5f32; w * h * 3];
+        for c in 0..3 {
+            raw[at(30, 40) + c] = 500.0 * (c + 1) as f32;
+        }
+        let mut out = vec![0.5f32; w * h * 3];
+        preserve_local_mean(&mut out, &raw, w, h);
+        for c in 0..3 {
+            let sum = |v: &[f32]| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).sum::<f64>();
+            let (want, got) = (sum(&raw), sum(&out));
+            assert!((got / want - 1.0).abs() < 1e-6, "channel {c}: sum {got}, raw {want}");
+            // Far away: as denoised (the global step moves it by < 0.1 %).
+            assert!((out[at(150, 110) + c] - 0.5).abs() < 5e-4, "{}", out[at(150, 110) + c]);
+            // Near: brighter, smoothly (no firefly comes back).
+            let (centre, beside) = (out[at(30, 40) + c], out[at(40, 40) + c]);
+            assert!(
+                centre > beside && beside > 0.5 && centre < 0.5 + (c + 1) as f32,
+                "{centre}, {beside}"
+            );
+        }
+    }
+
     #[test]
     fn guides_of_another_size_are_refused() {
         let film = Film::new(4, 4);
