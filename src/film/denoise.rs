@@ -184,26 +184,33 @@ pub const MEAN_WINDOW_SIGMA: f32 = 16.0;
 /// percent of 1, so that the image's mean is the raw one's exactly. An image
 /// the filter left unbiased stays as it is; its detail stays in any case.
 pub fn preserve_local_mean(denoised: &mut [f32], raw: &[f32], width: usize, height: usize) {
+    use rayon::prelude::*;
     assert_eq!(denoised.len(), raw.len());
     assert_eq!(raw.len(), width * height * 3);
     // Three boxes of 2r + 1 pixels: variance 3((2r + 1)² − 1)/12 = σ².
     let radius = (((4.0 * MEAN_WINDOW_SIGMA * MEAN_WINDOW_SIGMA + 1.0).sqrt() - 1.0) / 2.0).round() as usize;
-    let smooth = |v: &mut [f64]| {
+    let channel = |v: &[f32], c: usize| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    // The six smoothings (two images, three channels) are independent.
+    let mut smoothed: Vec<Vec<f64>> = (0..6)
+        .map(|k| channel(if k < 3 { denoised } else { raw }, k % 3))
+        .collect();
+    smoothed.par_iter_mut().for_each(|v| {
         for _ in 0..3 {
             box_sum(v, width, height, radius);
         }
-    };
+    });
     for c in 0..3 {
-        let channel = |v: &[f32]| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).collect::<Vec<f64>>();
-        let (d, r) = (channel(denoised), channel(raw));
-        let (mut kd, mut kr) = (d.clone(), r.clone());
-        smooth(&mut kd);
-        smooth(&mut kr);
+        let (kd, kr) = (&smoothed[c], &smoothed[c + 3]);
         // Kd = 0: nothing lit in the window, the pixel itself included.
-        let local: Vec<f64> = (0..d.len())
-            .map(|i| if kd[i] > 0.0 { d[i] * kr[i] / kd[i] } else { d[i] })
+        let local: Vec<f64> = denoised
+            .iter()
+            .skip(c)
+            .step_by(3)
+            .zip(kd.iter().zip(kr))
+            .map(|(&d, (&kd, &kr))| if kd > 0.0 { f64::from(d) * kr / kd } else { f64::from(d) })
             .collect();
-        let (total, want) = (local.iter().sum::<f64>(), r.iter().sum::<f64>());
+        let total: f64 = local.iter().sum();
+        let want: f64 = raw.iter().skip(c).step_by(3).map(|&x| f64::from(x)).sum();
         let global = if total > 0.0 { want / total } else { 1.0 };
         for (v, l) in denoised.iter_mut().skip(c).step_by(3).zip(local) {
             *v = (l * global) as f32;
@@ -211,41 +218,54 @@ pub fn preserve_local_mean(denoised: &mut [f32], raw: &[f32], width: usize, heig
     }
 }
 
+/// Index `i` of a line of `len` pixels mirrored at its ends (pixel `−1 − i`
+/// is pixel `i`); one reflection suffices for `−len ≤ i < 2 len`.
+fn mirror(i: isize, len: usize) -> usize {
+    let len = len as isize;
+    (if i < 0 {
+        -1 - i
+    } else if i >= len {
+        2 * len - 1 - i
+    } else {
+        i
+    }) as usize
+}
+
 /// Sum over the `(2r + 1)²` box around each pixel, in place, the image
-/// mirrored at its border (pixel `−1 − i` is pixel `i`): a symmetric
-/// operator whose rows all sum to `(2r + 1)²`, so a uniform image stays
-/// uniform up to the border.
+/// mirrored at its border: a symmetric operator whose rows all sum to
+/// `(2r + 1)²`, so a uniform image stays uniform up to the border. Running
+/// sums along each row, then over whole rows.
 fn box_sum(v: &mut [f64], width: usize, height: usize, r: usize) {
-    let mut prefix = Vec::new();
-    let mut pass = |v: &mut [f64], len: usize, count: usize, at: &dyn Fn(usize, usize) -> usize| {
-        // One reflection covers the window while r < len.
-        let r = r.min(len - 1) as isize;
-        let len_i = len as isize;
-        let mirror = |i: isize| {
-            if i < 0 {
-                -1 - i
-            } else if i >= len_i {
-                2 * len_i - 1 - i
-            } else {
-                i
-            }
-        };
-        for k in 0..count {
-            prefix.clear();
-            prefix.push(0.0);
-            let mut sum = 0.0;
-            for i in -r..len_i + r {
-                sum += v[at(k, mirror(i) as usize)];
-                prefix.push(sum);
-            }
-            let width = 2 * r as usize + 1;
-            for i in 0..len {
-                v[at(k, i)] = prefix[i + width] - prefix[i];
+    let rx = r.min(width - 1);
+    let mut line = vec![0.0; width + 2 * rx];
+    for row in v.chunks_exact_mut(width) {
+        for (i, l) in line.iter_mut().enumerate() {
+            *l = row[mirror(i as isize - rx as isize, width)];
+        }
+        let mut sum: f64 = line[..2 * rx + 1].iter().sum();
+        for x in 0..width {
+            row[x] = sum;
+            if x + 1 < width {
+                sum += line[x + 2 * rx + 1] - line[x];
             }
         }
-    };
-    pass(v, width, height, &|y, x| y * width + x);
-    pass(v, height, width, &|x, y| y * width + x);
+    }
+    let ry = r.min(height - 1) as isize;
+    let source = v.to_vec();
+    let row = |y: isize| &source[mirror(y, height) * width..][..width];
+    let mut sum = vec![0.0; width];
+    for y in -ry..=ry {
+        sum.iter_mut().zip(row(y)).for_each(|(s, x)| *s += x);
+    }
+    for (y, out) in v.chunks_exact_mut(width).enumerate() {
+        out.copy_from_slice(&sum);
+        let y = y as isize;
+        if y + 1 < height as isize {
+            for ((s, add), sub) in sum.iter_mut().zip(row(y + ry + 1)).zip(row(y - ry)) {
+                *s += add - sub;
+            }
+        }
+    }
 }
 
 #[cfg(feature = "denoise")]
