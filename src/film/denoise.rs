@@ -188,6 +188,9 @@ pub fn preserve_local_mean(denoised: &mut [f32], raw: &[f32], width: usize, heig
     use rayon::prelude::*;
     assert_eq!(denoised.len(), raw.len());
     assert_eq!(raw.len(), width * height * 3);
+    if raw.is_empty() {
+        return;
+    }
     // Three boxes of 2r + 1 pixels: variance 3((2r + 1)² − 1)/12 = σ².
     let radius = (((4.0 * MEAN_WINDOW_SIGMA * MEAN_WINDOW_SIGMA + 1.0).sqrt() - 1.0) / 2.0).round() as usize;
     let channel = |v: &[f32], c: usize| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).collect::<Vec<f64>>();
