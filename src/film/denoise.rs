@@ -1,8 +1,12 @@
 //! Denoising with Intel Open Image Denoise (OIDN, feature `denoise`): its
 //! `RT` filter on the linear HDR film, guided by the albedo and normal
-//! images (see `integrator::aov`). Those are noise-free in caustic (each
-//! sample follows perfect specular surfaces deterministically), so they are
-//! passed as clean auxiliaries and never prefiltered.
+//! images (see `integrator::aov`), followed by a correction that gives the
+//! filtered image the raw image's local mean ([`preserve_local_mean`]):
+//! the network removes outliers (caustic paths, the light's edges) with
+//! their energy, which darkened whole images by 1–2 % (docs/denoise.md).
+//! The guides are given as OIDN's ordinary (not `cleanAux`) auxiliaries:
+//! below a few dozen samples their antialiasing is itself noisy, and the
+//! clean-guide network measured a larger error there.
 //!
 //! OIDN's CPU device runs on TBB: Embree's when both are linked (the
 //! dynamic linker binds OIDN's TBB calls to the first TBB loaded, see
@@ -43,7 +47,8 @@ impl DenoiseQuality {
 
     /// Measured CPU seconds of the filter per million pixels, rounded up
     /// (high and balanced: 2.9 s at 1920×1080, 3.5 s at 256×256; fast:
-    /// 1.7 s at 1920×1080): what a time budget keeps back.
+    /// 1.7 s at 1920×1080; the mean correction adds about 0.3 s per million
+    /// pixels): what a time budget keeps back.
     pub fn cpu_seconds_per_megapixel(self) -> f64 {
         match self {
             Self::High | Self::Balanced => 4.0,
@@ -144,7 +149,8 @@ pub fn denoise(
         .flatten();
     // OIDN takes finite, non-negative HDR values; the film holds finite ones.
     let input = flatten(color, |v| if v.is_finite() { v.max(0.0) } else { 0.0 });
-    let output = run(&input, color.width, color.height, guides, quality)?;
+    let mut output = run(&input, color.width, color.height, guides, quality)?;
+    preserve_local_mean(&mut output, &input, color.width as usize, color.height as usize);
     let peak_memory = match (before, crate::memory::peak_rss_bytes()) {
         (Some(b), Some(p)) => Some(p.saturating_sub(b)),
         _ => None,
@@ -162,6 +168,108 @@ pub fn denoise(
             quality,
         },
     ))
+}
+
+/// Standard deviation, in pixels, of the window within which the denoised
+/// image keeps the raw image's light: wide enough that sharing out the raw
+/// image's outliers does not bring their noise back, narrow enough that the
+/// light stays where it was rendered (docs/denoise.md has the figures).
+pub const MEAN_WINDOW_SIGMA: f32 = 16.0;
+
+/// Gives back to `denoised` (interleaved RGB, `width × height`) the light
+/// the filter removed or added, where it was: each channel is multiplied by
+/// the ratio of the raw to the denoised image's local means, `d ⊙ Kr ⊘ Kd`,
+/// with `K` three box filters (a Gaussian of σ ≈ [`MEAN_WINDOW_SIGMA`]
+/// pixels, Wells 1986) mirrored at the image's border, then by the ratio of
+/// the channel's sums, which the local step leaves within a fraction of a
+/// percent of 1, so that the image's mean is the raw one's exactly. An image
+/// the filter left unbiased stays as it is; its detail stays in any case.
+pub fn preserve_local_mean(denoised: &mut [f32], raw: &[f32], width: usize, height: usize) {
+    use rayon::prelude::*;
+    assert_eq!(denoised.len(), raw.len());
+    assert_eq!(raw.len(), width * height * 3);
+    if raw.is_empty() {
+        return;
+    }
+    // Three boxes of 2r + 1 pixels: variance 3((2r + 1)² − 1)/12 = σ².
+    let radius = (((4.0 * MEAN_WINDOW_SIGMA * MEAN_WINDOW_SIGMA + 1.0).sqrt() - 1.0) / 2.0).round() as usize;
+    let channel = |v: &[f32], c: usize| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    // The six smoothings (two images, three channels) are independent.
+    let mut smoothed: Vec<Vec<f64>> = (0..6)
+        .map(|k| channel(if k < 3 { denoised } else { raw }, k % 3))
+        .collect();
+    smoothed.par_iter_mut().for_each(|v| {
+        for _ in 0..3 {
+            box_sum(v, width, height, radius);
+        }
+    });
+    for c in 0..3 {
+        let (kd, kr) = (&smoothed[c], &smoothed[c + 3]);
+        // Kd = 0: nothing lit in the window, the pixel itself included.
+        let local: Vec<f64> = denoised
+            .iter()
+            .skip(c)
+            .step_by(3)
+            .zip(kd.iter().zip(kr))
+            .map(|(&d, (&kd, &kr))| if kd > 0.0 { f64::from(d) * kr / kd } else { f64::from(d) })
+            .collect();
+        let total: f64 = local.iter().sum();
+        let want: f64 = raw.iter().skip(c).step_by(3).map(|&x| f64::from(x)).sum();
+        let global = if total > 0.0 { want / total } else { 1.0 };
+        for (v, l) in denoised.iter_mut().skip(c).step_by(3).zip(local) {
+            *v = (l * global) as f32;
+        }
+    }
+}
+
+/// Index `i` of a line of `len` pixels mirrored at its ends (pixel `−1 − i`
+/// is pixel `i`); one reflection suffices for `−len ≤ i < 2 len`.
+fn mirror(i: isize, len: usize) -> usize {
+    let len = len as isize;
+    (if i < 0 {
+        -1 - i
+    } else if i >= len {
+        2 * len - 1 - i
+    } else {
+        i
+    }) as usize
+}
+
+/// Sum over the `(2r + 1)²` box around each pixel, in place, the image
+/// mirrored at its border: a symmetric operator whose rows all sum to
+/// `(2r + 1)²`, so a uniform image stays uniform up to the border. Running
+/// sums along each row, then over whole rows.
+fn box_sum(v: &mut [f64], width: usize, height: usize, r: usize) {
+    let rx = r.min(width - 1);
+    let mut line = vec![0.0; width + 2 * rx];
+    for row in v.chunks_exact_mut(width) {
+        for (i, l) in line.iter_mut().enumerate() {
+            *l = row[mirror(i as isize - rx as isize, width)];
+        }
+        let mut sum: f64 = line[..2 * rx + 1].iter().sum();
+        for x in 0..width {
+            row[x] = sum;
+            if x + 1 < width {
+                sum += line[x + 2 * rx + 1] - line[x];
+            }
+        }
+    }
+    let ry = r.min(height - 1) as isize;
+    let source = v.to_vec();
+    let row = |y: isize| &source[mirror(y, height) * width..][..width];
+    let mut sum = vec![0.0; width];
+    for y in -ry..=ry {
+        sum.iter_mut().zip(row(y)).for_each(|(s, x)| *s += x);
+    }
+    for (y, out) in v.chunks_exact_mut(width).enumerate() {
+        out.copy_from_slice(&sum);
+        let y = y as isize;
+        if y + 1 < height as isize {
+            for ((s, add), sub) in sum.iter_mut().zip(row(y + ry + 1)).zip(row(y - ry)) {
+                *s += add - sub;
+            }
+        }
+    }
 }
 
 #[cfg(feature = "denoise")]
@@ -214,7 +322,10 @@ fn filter_with(
         )
     });
     if let Some((albedo, normal)) = &aux {
-        filter.albedo_normal(albedo, normal).clean_aux(true);
+        // Not `clean_aux`: the crate passes it under a name OIDN ignores
+        // ("clean_aux" for "cleanAux"), and the clean-guide network measured
+        // more error on caustic's guides below a few dozen spp (module doc).
+        filter.albedo_normal(albedo, normal);
     }
     let mut output = vec![0.0f32; input.len()];
     filter.filter(input, &mut output)?;
@@ -302,6 +413,47 @@ mod tests {
         assert!(e.to_string().contains("`denoise` feature"), "{e}");
         assert!(require().is_err() && !available() && library().is_none());
         let _ = Rng::new(1, crate::math::rng::Domain::Analysis, 0, 0);
+    }
+
+    /// An image the filter left as it was comes back unchanged.
+    #[test]
+    fn the_mean_correction_leaves_an_unbiased_image_alone() {
+        let (w, h) = (70usize, 50usize);
+        let mut rng = Rng::new(5, crate::math::rng::Domain::Analysis, 0, 0);
+        let raw: Vec<f32> = (0..w * h * 3).map(|_| rng.f32() * 3.0).collect();
+        let mut out = raw.clone();
+        preserve_local_mean(&mut out, &raw, w, h);
+        for (a, b) in out.iter().zip(&raw) {
+            assert!((a - b).abs() <= 1e-5 * b.max(1.0), "{a} ≠ {b}");
+        }
+    }
+
+    /// A firefly the filter removed gives its light back around its place:
+    /// the sums are the raw ones, pixels beyond the window (3 × 16 px) keep
+    /// their value, and the light went to the firefly's neighbourhood.
+    #[test]
+    fn the_mean_correction_gives_a_removed_fireflys_light_back_where_it_was() {
+        let (w, h) = (160usize, 120usize);
+        let at = |x: usize, y: usize| (y * w + x) * 3;
+        let mut raw = vec![0.5f32; w * h * 3];
+        for c in 0..3 {
+            raw[at(30, 40) + c] = 500.0 * (c + 1) as f32;
+        }
+        let mut out = vec![0.5f32; w * h * 3];
+        preserve_local_mean(&mut out, &raw, w, h);
+        for c in 0..3 {
+            let sum = |v: &[f32]| v.iter().skip(c).step_by(3).map(|&x| f64::from(x)).sum::<f64>();
+            let (want, got) = (sum(&raw), sum(&out));
+            assert!((got / want - 1.0).abs() < 1e-6, "channel {c}: sum {got}, raw {want}");
+            // Far away: as denoised (the global step moves it by < 0.1 %).
+            assert!((out[at(150, 110) + c] - 0.5).abs() < 5e-4, "{}", out[at(150, 110) + c]);
+            // Near: brighter, smoothly (no firefly comes back).
+            let (centre, beside) = (out[at(30, 40) + c], out[at(40, 40) + c]);
+            assert!(
+                centre > beside && beside > 0.5 && centre < 0.5 + (c + 1) as f32,
+                "{centre}, {beside}"
+            );
+        }
     }
 
     #[test]
