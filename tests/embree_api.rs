@@ -1,7 +1,7 @@
 //! The public Embree API end to end on a small scene: selection through
 //! `accel::build`, version and origin, errors as values. Small on purpose:
-//! this is the test to run under valgrind (see the leak-check command in the
-//! Embree section of ARCHITECTURE.md / the lead's README).
+//! this is the test to run under valgrind (the command is in
+//! docs/commands.md, "Checking the Embree binding under valgrind").
 
 mod embree_support;
 
