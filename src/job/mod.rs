@@ -262,6 +262,22 @@ impl JobError {
 
 /// A job ready to run: the scene with its final settings, the accelerator,
 /// the accumulation to continue and the outputs, all checked.
+///
+/// ```
+/// use caustic::accel::AccelKind;
+/// use caustic::job::{JobHooks, RenderJob, RenderRequest};
+///
+/// let dir = tempfile::tempdir()?;
+/// let mut request = RenderRequest::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/test/shadow.toml"));
+/// request.overrides.width = Some(32);
+/// request.overrides.height = Some(24);
+/// request.accel = Some(AccelKind::KdTree);
+/// request.png = Some(dir.path().join("shadow.png"));
+/// let report = RenderJob::prepare(&request)?.run(&JobHooks::silent())?;
+/// assert!(report.output.complete);
+/// assert!(dir.path().join("shadow.png").is_file());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct RenderJob {
     /// The scene, with the overrides applied.
     pub scene: Scene,

@@ -143,7 +143,7 @@ pub fn ray(scene: &Scene, seed: u64, i: u64) -> Ray {
     let lo = b.min - b.extent() * 0.2;
     let ext = b.extent() * 1.4;
     let origin = lo + ext * Vec3A::new(rng.f32(), rng.f32(), rng.f32());
-    if i % 2 == 0 {
+    if i.is_multiple_of(2) {
         return Ray::new(origin, uniform_dir(&mut rng));
     }
     let k = rng.below(scene.objects.len() as u32) as usize;

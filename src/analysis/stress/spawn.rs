@@ -498,7 +498,7 @@ fn leak_trial(scene: &Scene, accel: &dyn Accel, c: Vec3A, rng: &mut Rng) -> Opti
     let hit = accel.intersect(&ray, f32::INFINITY)?;
     let si = scene.surface_interaction(&ray, &hit);
     let face = box_face(scene, &hit);
-    let (axis, side) = (face / 2, if face % 2 == 0 { -1.0f32 } else { 1.0 });
+    let (axis, side) = (face / 2, if face.is_multiple_of(2) { -1.0f32 } else { 1.0 });
     // A target on the box surface, off the starting face: coordinates in
     // {−1, +1} on the fixed axes, free in (−1, 1) on the others.
     let kind = match rng.below(4) {
