@@ -7,7 +7,7 @@
 //! chunks' trees built at once with rayon.
 //!
 //! The cuts are planned on a fixed sample of the points (every
-//! [`CUT_SAMPLE_STRIDE`]-th): median cuts across the longest axis of each
+//! `CUT_SAMPLE_STRIDE`-th): median cuts across the longest axis of each
 //! part of the sample, ties broken by index, down to [`chunk_depth`] levels.
 //! Every point then finds its chunk by walking those cuts, and is scattered
 //! into it by a counting sort. The structure is a fixed function of the
@@ -231,7 +231,7 @@ impl ChunkedTree {
     /// in `points` of the point that the tree calls `j`.
     ///
     /// Each chunk's points are sorted along a Z-order curve before kiddo
-    /// builds its tree ([`morton_sort`]): kiddo's build is cache-bound (it
+    /// builds its tree (`morton_sort`): kiddo's build is cache-bound (it
     /// runs about three times faster over coherent points than over
     /// shuffled ones), and the items of a leaf, hence the payloads a query
     /// reads, become neighbours in memory. At 100M photons (71M stored)

@@ -16,7 +16,7 @@
 //!   neighbourhood (triangle inequality);
 //! - [`precomputed`]: irradiance precomputed at every few stored photons
 //!   (Christensen 1999) and the per-thread site cache;
-//! - [`file`]: photon files (`caustic photons`, `--photon-map`);
+//! - [`mod@file`]: photon files (`caustic photons`, `--photon-map`);
 //! - [`progressive`]: progressive photon mapping's schedule (Knaus &
 //!   Zwicker 2011): one independent map per sample index and its radius.
 //!

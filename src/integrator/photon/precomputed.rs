@@ -9,7 +9,7 @@
 //!
 //! - the nearest site lies within its own gather radius of the point (the
 //!   two estimates would share most of their photons; for sites thinned
-//!   below one per `k/8` photons, a multiple of it: see [`reach2`]), and
+//!   below one per `k/8` photons, a multiple of it: see `reach2`), and
 //! - the sites' normals are within [`NORMAL_COS`] of the point's
 //!   (Christensen's normal check: a corner's two walls, or a thin wall's
 //!   two sides, keep their own irradiance);
