@@ -2,26 +2,13 @@
 //! PNG back and check what a person would look at (colours, shadows,
 //! reflections), plus exit codes and messages for bad input.
 
+mod common;
+
 use caustic::math::Vec3A;
 use caustic::scene::{load_scene, Camera};
+use common::cli::{caustic, stderr, stdout};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn caustic(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the caustic binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use std::process::Output;
 
 /// Pixel (x, y) where the camera sees world point `p` (inverse of `Camera::ray`).
 fn project(cam: &Camera, p: Vec3A, width: u32, height: u32) -> (u32, u32) {
