@@ -49,7 +49,7 @@ const BRUTE_BUDGET: u64 = 200_000_000;
 /// cast through each. Embree against the KD-tree on every scene when Embree
 /// is compiled in; brute force against each on small scenes with [`RAYS`];
 /// and in a build without Embree, a large scene's KD-tree against brute
-/// force with as many rays as [`BRUTE_BUDGET`] allows (at least 64). Every
+/// force with as many rays as [`BRUTE_BUDGET`] allows (at least 16). Every
 /// scene gets at least one pair: none would be a test that checks nothing.
 fn pairs(scene: &Scene, name: &str) -> Vec<Pair> {
     let options = AccelOptions::default();
@@ -69,7 +69,7 @@ fn pairs(scene: &Scene, name: &str) -> Vec<Pair> {
         kinds.push((
             AccelKind::KdTree,
             AccelKind::Brute,
-            (BRUTE_BUDGET / triangles.max(1)).clamp(64, RAYS),
+            (BRUTE_BUDGET / triangles.max(1)).clamp(16, RAYS),
         ));
     }
     assert!(!kinds.is_empty(), "{name}: no accelerator pair to cross-check");
