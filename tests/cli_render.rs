@@ -340,3 +340,39 @@ material = "hot"
         stderr(&render)
     );
 }
+
+/// The README's first scene is `examples/first.toml`, word for word, and it
+/// renders: the photon pass runs (the ball is glass) and the image is written.
+#[test]
+fn the_readme_scene_is_the_example_file_and_renders() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let file = std::fs::read_to_string(root.join("examples/first.toml")).unwrap();
+    let block = readme
+        .split("```toml\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("README.md has a ```toml block");
+    assert_eq!(block, file, "README.md's scene differs from examples/first.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("first.png");
+    let o = caustic(&[
+        "render",
+        "examples/first.toml",
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--spp",
+        "2",
+        "--photons",
+        "20000",
+        "--accel",
+        "kdtree",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("photon pass: 20000 emitted"), "{}", stdout(&o));
+    assert!(png.is_file());
+}
