@@ -48,10 +48,9 @@
 //! A shadow ray from there toward a light on the incident side goes into the
 //! sphere and must hit its far side at the chord `2r·sin α`, where `α` is its
 //! angle to the tangent plane; the grazing shadow rays (`α` down to 1e-6 rad)
-//! make that chord arbitrarily short. An earlier "no re-hit within `0.5 s`"
-//! rule counted these correct hits as failures (≈0.02% of shadow rays, the
-//! same for every backend, at every scale: replayed in f64, every one was
-//! the exit root of an origin inside the sphere).
+//! make that chord arbitrarily short, so a "no re-hit within `0.5 s`" rule
+//! would count these correct hits (exit roots of origins inside the sphere,
+//! as a replay in f64 confirms) as failures.
 //!
 //! For shadow rays, an `occluded` answer that disagrees with the closest hit
 //! below `t_max` also fails. A non-finite hit point, error bound or normal

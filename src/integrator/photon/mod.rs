@@ -239,8 +239,8 @@ pub fn trace_photons_with(
     let tracer = PhotonTracer::with_rules(scene, accel, count, rules).with_stream(stream);
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
-    // arrive), they never move while growing; growth by doubling copied
-    // and page-faulted them anew (2.8 GiB of faults at 100M photons).
+    // arrive), they never move while growing; growth by doubling would
+    // copy and page-fault them anew at every step.
     let capacity = usize::try_from(count).unwrap_or(usize::MAX);
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(capacity);
     let mut records: Vec<PhotonRecord> = Vec::with_capacity(capacity);

@@ -236,7 +236,7 @@ impl PhotonMap {
         // Sites in Z-order over the map's bounds: consecutive gathers (one
         // task's) then lie side by side and walk the same parts of the
         // tree; emission order is coherent in direction space only, and
-        // consecutive sites lay metres apart (Z-order: 35% faster).
+        // consecutive sites would lie metres apart.
         let bounds = self.bounds();
         let top = (1u32 << 21) as f32 - 1.0;
         let scale = Vec3A::splat(top) / bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE));
