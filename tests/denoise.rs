@@ -11,6 +11,8 @@ use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec3, Vec3A};
 use caustic::scene::{Camera, IntegratorKind, Light, Material, Mirror, RenderSettings, Scene};
 use common::cli::{caustic, stderr};
+#[cfg(feature = "denoise")]
+use common::metrics::relmse;
 use common::scenes::quad;
 use std::collections::HashMap;
 use std::path::Path;
@@ -158,13 +160,6 @@ fn exr_channels(path: &Path) -> HashMap<String, Vec<f32>> {
             (c.name.to_string(), values)
         })
         .collect()
-}
-
-/// Relative mean squared error of `a` against `b` (ε = 0.01, as `caustic converge`).
-#[cfg(feature = "denoise")]
-fn relmse(a: &[f32], b: &[f32]) -> f64 {
-    let e = |x: f32, r: f32| ((x - r) as f64).powi(2) / ((r as f64).powi(2) + 1e-2);
-    a.iter().zip(b).map(|(&x, &r)| e(x, r)).sum::<f64>() / a.len() as f64
 }
 
 #[test]
