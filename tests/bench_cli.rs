@@ -2,15 +2,11 @@
 //! report's structure, every figure positive and finite, and the same hit
 //! counts from every accelerator. No timing is asserted.
 
+mod common;
+
+use common::cli::command;
 use serde_json::Value;
 use std::path::Path;
-use std::process::Command;
-
-fn caustic() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_caustic"));
-    c.current_dir(env!("CARGO_MANIFEST_DIR"));
-    c
-}
 
 /// The accelerators compared: both real ones when Embree is compiled in,
 /// else the KD-tree against the brute-force oracle.
@@ -37,7 +33,7 @@ fn bench_writes_a_consistent_report() {
     let dir = tempfile::tempdir().unwrap();
     let json_path = dir.path().join("bench.json");
     let (list, names) = accels();
-    let out = caustic()
+    let out = command(&[])
         .args(["bench", "scenes/test/shadow.toml", "scenes/cornell.toml"])
         .args(["--accel", list, "--rays", "3000", "--repeats", "2", "--seed", "5"])
         .args([
@@ -185,14 +181,14 @@ fn bad_bench_input_exits_2_before_running() {
         (&["bench", "scenes/test/shadow.toml", "--repeats", "0"], "--repeats"),
     ];
     for (args, expected) in cases {
-        let out = caustic().args(args).output().unwrap();
+        let out = command(&[]).args(args).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
     }
     // An unwritable JSON path is reported before any measurement.
     let json = dir.path().join("no/such/dir/out.json");
-    let out = caustic()
+    let out = command(&[])
         .args(["bench", "scenes/test/shadow.toml", "--rays", "10", "--json"])
         .arg(&json)
         .output()

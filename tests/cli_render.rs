@@ -2,26 +2,13 @@
 //! PNG back and check what a person would look at (colours, shadows,
 //! reflections), plus exit codes and messages for bad input.
 
+mod common;
+
 use caustic::math::Vec3A;
 use caustic::scene::{load_scene, Camera};
+use common::cli::{caustic, stderr, stdout};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn caustic(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the caustic binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use std::process::Output;
 
 /// Pixel (x, y) where the camera sees world point `p` (inverse of `Camera::ray`).
 fn project(cam: &Camera, p: Vec3A, width: u32, height: u32) -> (u32, u32) {
@@ -352,4 +339,40 @@ material = "hot"
         "{}",
         stderr(&render)
     );
+}
+
+/// The README's first scene is `examples/first.toml`, word for word, and it
+/// renders: the photon pass runs (the ball is glass) and the image is written.
+#[test]
+fn the_readme_scene_is_the_example_file_and_renders() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let file = std::fs::read_to_string(root.join("examples/first.toml")).unwrap();
+    let block = readme
+        .split("```toml\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("README.md has a ```toml block");
+    assert_eq!(block, file, "README.md's scene differs from examples/first.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("first.png");
+    let o = caustic(&[
+        "render",
+        "examples/first.toml",
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--spp",
+        "2",
+        "--photons",
+        "20000",
+        "--accel",
+        "kdtree",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("photon pass: 20000 emitted"), "{}", stdout(&o));
+    assert!(png.is_file());
 }

@@ -1,21 +1,16 @@
 //! `caustic converge` end to end: a reference rendered at many samples and
 //! photons (seed 99), convergence runs against it (seed 3), CSV and plot.
 
+mod common;
+
+use common::cli::{caustic, describe};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 
 const SCENE: &str = "scenes/test/caustic.toml";
 const W: &str = "48";
 const H: &str = "36";
-
-fn caustic(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run caustic")
-}
 
 /// `caustic converge` on the test scene against the shared reference, at
 /// the reference's size, with `extra` arguments.
@@ -32,15 +27,6 @@ fn converge(extra: &[&str]) -> Output {
     ];
     args.extend_from_slice(extra);
     caustic(&args)
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "status {:?}\nstdout:\n{}\nstderr:\n{}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 /// The reference, rendered once for the whole file: 256 spp, 2M photons, seed 99.
@@ -68,7 +54,7 @@ fn reference() -> &'static Path {
             "--exr",
             path.to_str().unwrap(),
         ]);
-        assert!(o.status.success(), "{}", text(&o));
+        assert!(o.status.success(), "{}", describe(&o));
         (dir, path)
     });
     path
@@ -138,7 +124,7 @@ fn error_falls_with_budget_and_csv_and_plot_are_written() {
         "700x300",
         "--quiet",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
+    assert!(o.status.success(), "{}", describe(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("relMSE ε = 1e-2"), "{stdout}");
 
@@ -197,7 +183,7 @@ fn time_budgets_use_the_doubling_search() {
         "--csv",
         csv.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", text(&o));
+    assert!(o.status.success(), "{}", describe(&o));
     let rows = parse_csv(&csv);
     assert_eq!(rows.len(), 2);
     // Nothing fits in a microsecond: the 1-spp render is reported, flagged.
@@ -317,7 +303,7 @@ fn bad_inputs_exit_2_with_a_clear_message() {
         .chain([(junk, "x.png: cannot read the reference EXR")])
     {
         let o = caustic(&args);
-        assert_eq!(o.status.code(), Some(2), "{args:?}\n{}", text(&o));
+        assert_eq!(o.status.code(), Some(2), "{args:?}\n{}", describe(&o));
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(stderr.contains(want), "{args:?}: want {want:?}\n{stderr}");
     }
@@ -339,7 +325,7 @@ fn sample_budgets_without_a_photon_count_use_the_given_count_not_the_warm_ups() 
         "--csv",
         csv.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", text(&o));
+    assert!(o.status.success(), "{}", describe(&o));
     let rows = parse_csv(&csv);
     // The untimed warm-up emits at most 100,000 photons; the measured
     // render emits what was asked for.

@@ -9,8 +9,7 @@
 //! Every scene must load (the dragon is found or fetched by `io::assets`);
 //! a scene that does not load fails the test.
 
-#[path = "embree_support/mod.rs"]
-mod embree_support;
+mod common;
 
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::analysis::crosscheck::{crosscheck, CrosscheckOptions, CrosscheckReport, RayKind};
@@ -39,29 +38,45 @@ fn scene_files(dirs: &[&str]) -> Vec<PathBuf> {
     files
 }
 
-/// The accelerator pairs worth running on `scene`, built.
-fn pairs(scene: &Scene, name: &str) -> Vec<(Box<dyn Accel>, Box<dyn Accel>)> {
+/// Two accelerators built on one scene and the rays to cast through both.
+type Pair = (Box<dyn Accel>, Box<dyn Accel>, u64);
+
+/// Triangle tests brute force may spend on one scene and pair
+/// (rays × instanced triangles), when it is the only check a large scene has.
+const BRUTE_BUDGET: u64 = 200_000_000;
+
+/// The accelerator pairs worth running on `scene`, built, with the rays to
+/// cast through each. Embree against the KD-tree on every scene when Embree
+/// is compiled in; brute force against each on small scenes with [`RAYS`];
+/// and in a build without Embree, a large scene's KD-tree against brute
+/// force with as many rays as [`BRUTE_BUDGET`] allows (at least 16). Every
+/// scene gets at least one pair: none would be a test that checks nothing.
+fn pairs(scene: &Scene, name: &str) -> Vec<Pair> {
     let options = AccelOptions::default();
     let build = |kind| accel::build(scene, kind, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let small = scene.instanced_triangles() <= BRUTE_MAX_TRIANGLES;
+    let triangles = scene.instanced_triangles();
+    let small = triangles <= BRUTE_MAX_TRIANGLES;
     let mut kinds = Vec::new();
     if cfg!(feature = "embree") {
-        kinds.push((AccelKind::Embree, AccelKind::KdTree));
+        kinds.push((AccelKind::Embree, AccelKind::KdTree, RAYS));
         if small {
-            kinds.push((AccelKind::Embree, AccelKind::Brute));
+            kinds.push((AccelKind::Embree, AccelKind::Brute, RAYS));
         }
     }
     if small {
-        kinds.push((AccelKind::KdTree, AccelKind::Brute));
+        kinds.push((AccelKind::KdTree, AccelKind::Brute, RAYS));
+    } else if kinds.is_empty() {
+        kinds.push((
+            AccelKind::KdTree,
+            AccelKind::Brute,
+            (BRUTE_BUDGET / triangles.max(1)).clamp(16, RAYS),
+        ));
     }
-    let mut built = Vec::new();
-    for (a, b) in kinds {
-        built.push((build(a), build(b)));
-    }
-    if built.is_empty() {
-        eprintln!("{name}: no accelerator pair can run on this scene in this build");
-    }
-    built
+    assert!(!kinds.is_empty(), "{name}: no accelerator pair to cross-check");
+    kinds
+        .into_iter()
+        .map(|(a, b, rays)| (build(a), build(b), rays))
+        .collect()
 }
 
 /// The report must hold no disagreement; ties must stay rare on the rays
@@ -90,18 +105,18 @@ fn every_scene_file_crosschecks() {
     for path in &files {
         let name = path.display().to_string();
         let scene = load_scene(path).unwrap_or_else(|e| panic!("{name} does not load: {e}"));
-        for (a, b) in pairs(&scene, &name) {
+        for (a, b, rays) in pairs(&scene, &name) {
             let report = crosscheck(
                 &scene,
                 a.as_ref(),
                 b.as_ref(),
                 &CrosscheckOptions {
-                    rays: RAYS,
+                    rays,
                     seed: scene.settings.seed,
                 },
             );
             assert_clean(&format!("{name}: {} vs {}", report.a_name, report.b_name), &report);
-            assert_eq!(report.total().rays, RAYS);
+            assert_eq!(report.total().rays, rays);
             checked += 1;
         }
     }
@@ -113,14 +128,9 @@ fn every_scene_file_crosschecks() {
 /// spheres and quads: the scene files of this branch have no mesh yet.
 #[test]
 fn instanced_mesh_scene_crosschecks() {
-    let scene = embree_support::test_scene();
-    for (a, b) in pairs(&scene, "instanced test scene") {
-        let report = crosscheck(
-            &scene,
-            a.as_ref(),
-            b.as_ref(),
-            &CrosscheckOptions { rays: RAYS, seed: 2024 },
-        );
+    let scene = common::scenes::test_scene();
+    for (a, b, rays) in pairs(&scene, "instanced test scene") {
+        let report = crosscheck(&scene, a.as_ref(), b.as_ref(), &CrosscheckOptions { rays, seed: 2024 });
         let name = format!("instanced test scene, {} vs {}", report.a_name, report.b_name);
         assert_clean(&name, &report);
         // Rays aimed at vertices and edges must mostly reach geometry, or

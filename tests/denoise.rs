@@ -3,34 +3,19 @@
 //! the EXR layers, `--denoise` on the command line, and the error of a
 //! build without the `denoise` feature.
 
+mod common;
+
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Accumulation;
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec3, Vec3A};
-use caustic::scene::{Camera, IntegratorKind, Light, Material, Mirror, Object, Quad, RenderSettings, Scene, Shape};
+use caustic::scene::{Camera, IntegratorKind, Light, Material, Mirror, RenderSettings, Scene};
+use common::cli::{caustic, stderr};
+#[cfg(feature = "denoise")]
+use common::metrics::relmse;
+use common::scenes::quad;
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn caustic(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the caustic binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn quad(corner: [f32; 3], u: [f32; 3], v: [f32; 3], material: u32) -> Object {
-    Object {
-        name: "quad".into(),
-        shape: Shape::Quad(Quad::new(corner.into(), u.into(), v.into()).unwrap()),
-        material,
-    }
-}
 
 const WALL: Vec3A = Vec3A::new(0.6, 0.3, 0.2);
 const TINT: Vec3A = Vec3A::new(0.9, 0.8, 0.7);
@@ -175,13 +160,6 @@ fn exr_channels(path: &Path) -> HashMap<String, Vec<f32>> {
             (c.name.to_string(), values)
         })
         .collect()
-}
-
-/// Relative mean squared error of `a` against `b` (ε = 0.01, as `caustic converge`).
-#[cfg(feature = "denoise")]
-fn relmse(a: &[f32], b: &[f32]) -> f64 {
-    let e = |x: f32, r: f32| ((x - r) as f64).powi(2) / ((r as f64).powi(2) + 1e-2);
-    a.iter().zip(b).map(|(&x, &r)| e(x, r)).sum::<f64>() / a.len() as f64
 }
 
 #[test]

@@ -1,9 +1,9 @@
 //! The public Embree API end to end on a small scene: selection through
 //! `accel::build`, version and origin, errors as values. Small on purpose:
-//! this is the test to run under valgrind (see the leak-check command in the
-//! Embree section of ARCHITECTURE.md / the lead's README).
+//! this is the test to run under valgrind (the command is in
+//! docs/commands.md, "Checking the Embree binding under valgrind").
 
-mod embree_support;
+mod common;
 
 use caustic::accel::{build, AccelError, AccelKind, AccelOptions};
 
@@ -11,7 +11,7 @@ use caustic::accel::{build, AccelError, AccelKind, AccelOptions};
 #[test]
 fn embree_is_unavailable_without_the_feature() {
     assert_eq!(AccelKind::default_kind(), AccelKind::KdTree);
-    let scene = embree_support::test_scene();
+    let scene = common::scenes::test_scene();
     let err = build(&scene, AccelKind::Embree, &AccelOptions::default())
         .err()
         .expect("no Embree");
@@ -40,7 +40,7 @@ mod with_embree {
 
     #[test]
     fn small_scene_through_accel_build() {
-        let scene = embree_support::test_scene();
+        let scene = common::scenes::test_scene();
         let accel = build(&scene, AccelKind::Embree, &AccelOptions::default()).unwrap();
         let stats = accel.stats();
         assert_eq!(stats.name, "embree");
@@ -56,7 +56,7 @@ mod with_embree {
         let brute = caustic::accel::brute::BruteForce::new(&scene, caustic::accel::TriangleTest::Watertight);
         let mut hits = 0;
         for i in 0..400 {
-            let r = embree_support::ray(&scene, 99, i);
+            let r = common::scenes::ray(&scene, 99, i);
             let (e, b) = (accel.intersect(&r, f32::INFINITY), brute.intersect(&r, f32::INFINITY));
             assert_eq!(e.map(|h| h.instance), b.map(|h| h.instance), "ray {i}: {r:?}");
             assert_eq!(accel.occluded(&r, f32::INFINITY), b.is_some(), "ray {i}: {r:?}");
@@ -76,7 +76,7 @@ mod with_embree {
             Err(other) => panic!("wrong error kind: {other}"),
             Ok(_) => panic!("Embree accepted an invalid config"),
         }
-        let scene = embree_support::test_scene();
+        let scene = common::scenes::test_scene();
         let options = AccelOptions {
             embree_quality: "ultra".into(),
             ..Default::default()

@@ -10,7 +10,7 @@
 //! the test with the ray printed so it can be replayed.
 #![cfg(feature = "embree")]
 
-mod embree_support;
+mod common;
 
 use caustic::accel::brute::BruteForce;
 use caustic::accel::embree::EmbreeAccel;
@@ -18,7 +18,7 @@ use caustic::accel::{Accel, AccelOptions, TriangleTest};
 use caustic::analysis::crosscheck::{crosscheck, CrosscheckOptions, CrosscheckReport, RayKind};
 use caustic::math::{Ray, Vec3A};
 use caustic::scene::Scene;
-use embree_support::test_scene;
+use common::scenes::test_scene;
 
 fn run(scene: &Scene, options: &AccelOptions, rays: u64, seed: u64) -> CrosscheckReport {
     let embree = EmbreeAccel::build(scene, options).unwrap();

@@ -5,6 +5,9 @@
 //! render. The catalogue is mirrored in `docs/hostile-inputs.md` (a test
 //! checks that every case is listed there).
 
+mod common;
+
+use common::cli::command;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -687,9 +690,8 @@ fn run(case: &Case) -> Outcome {
     let out_dir = dir.path().join("out");
     std::fs::create_dir(&out_dir).unwrap();
     let png = out_dir.join("image.png");
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustic"));
-    cmd.arg("render")
-        .arg(&run.scene)
+    let mut cmd = command(&["render"]);
+    cmd.arg(&run.scene)
         .arg("-o")
         .arg(&png)
         .args(["--accel", "kdtree", "--quiet", "--threads", "1"])

@@ -166,7 +166,9 @@ fn ply_header_announcing_a_trillion_vertices_fails_fast() {
     // The same inside gzip, where the file size says nothing about the content.
     let p = d.write_gz("a.ply.gz", text.as_bytes());
     fails_with(&p, "element 'vertex' announces 1000000000000 items");
-    assert!(start.elapsed().as_secs_f64() < 1.0);
+    // A bound on a hang, not a speed test: a loader that walked the
+    // announced items would take hours. Speed is measured in benches/.
+    assert!(start.elapsed().as_secs() < 60, "took {:?}", start.elapsed());
 }
 
 /// A binary little-endian PLY: 4 vertices, a triangle and a quad.

@@ -4,11 +4,14 @@
 //! energy the physically based photons carry, the medium's transmittance,
 //! light shafts from the volume map, and determinism.
 
+mod common;
+
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::photon::{trace_photons_with, PhotonRules};
 use caustic::integrator::plan::{MediumPlan, PhotonPlan};
 use caustic::integrator::{render, RenderPlan};
 use caustic::scene::{parse_scene, CausticsMode, IntegratorKind, Scene};
+use common::cli::caustic;
 use std::path::Path;
 
 fn scene(text: &str) -> Scene {
@@ -369,12 +372,6 @@ fn photon_files_are_refused_for_the_path_integrators_maps() {
     let dir = tempfile::tempdir().unwrap();
     let scene_file = dir.path().join("glass.toml");
     std::fs::write(&scene_file, GLASS).unwrap();
-    let caustic = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
-            .args(args)
-            .output()
-            .unwrap()
-    };
     let map = dir.path().join("map.bin");
     let out = caustic(&["photons", scene_file.to_str().unwrap(), "-o", map.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);

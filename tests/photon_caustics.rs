@@ -2,31 +2,23 @@
 //! analytic value, convergence toward a high-photon reference, determinism
 //! across thread counts, and the plan skipping the pass.
 
-use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+mod common;
+
+use caustic::accel::AccelKind;
 use caustic::film::Film;
 use caustic::integrator::photon::{photon_pass, PhotonMap};
 use caustic::integrator::plan::PhotonPlan;
 use caustic::integrator::{render, render_with_photons, RenderPlan};
 use caustic::math::Vec3A;
 use caustic::scene::{
-    AreaLight, Camera, Dielectric, Light, Material, Mirror, Object, Quad, RenderSettings, Scene, Shape, Sphere,
+    AreaLight, Camera, Dielectric, Light, Material, Mirror, Object, RenderSettings, Scene, Shape, Sphere,
 };
-
-fn quad(corner: [f32; 3], u: [f32; 3], v: [f32; 3], material: u32) -> Object {
-    Object {
-        name: "quad".into(),
-        shape: Shape::Quad(Quad::new(corner.into(), u.into(), v.into()).unwrap()),
-        material,
-    }
-}
+use common::metrics::film_rmse;
+use common::scenes::{build, quad};
 
 /// A floor in the plane y = 0 spanning [-h, h]², facing +y.
 fn floor(h: f32, material: u32) -> Object {
     quad([-h, 0.0, h], [2.0 * h, 0.0, 0.0], [0.0, 0.0, -2.0 * h], material)
-}
-
-fn build(scene: &Scene) -> Box<dyn Accel> {
-    accel::build(scene, AccelKind::Brute, &AccelOptions::default()).unwrap()
 }
 
 /// A point light at y = 1 under a horizontal 1×1 mirror at y = 3 facing
@@ -77,7 +69,7 @@ fn rectangle_solid_angle(a: f64, b: f64, h: f64) -> f64 {
 fn mirror_caustic_carries_the_expected_energy() {
     for reflectivity in [1.0f32, 0.6] {
         let scene = mirror_scene(reflectivity, 200_000);
-        let accel = build(&scene);
+        let accel = build(&scene, AccelKind::Brute);
         let (map, stats) = photon_pass(&scene, accel.as_ref(), 200_000);
         assert_eq!(stats.emitted, 200_000);
         assert!(stats.stored > 50_000, "{stats}");
@@ -145,32 +137,19 @@ fn glass_scene(count: u64) -> Scene {
     }
 }
 
-fn rmse(a: &Film, b: &Film) -> f64 {
-    let sum: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| {
-            let d = *x - *y;
-            (d.x as f64).powi(2) + (d.y as f64).powi(2) + (d.z as f64).powi(2)
-        })
-        .sum();
-    (sum / (3 * a.pixels.len()) as f64).sqrt()
-}
-
 #[test]
 fn more_photons_give_lower_error_against_a_reference() {
     let reference = render_caustic(400_000);
     let errors: Vec<f64> = [2_000u64, 10_000, 50_000]
         .iter()
-        .map(|&n| rmse(&render_caustic(n), &reference))
+        .map(|&n| film_rmse(&render_caustic(n), &reference))
         .collect();
     assert!(errors[0] > errors[1] && errors[1] > errors[2], "{errors:?}");
     assert!(errors[2] < 0.5 * errors[0], "{errors:?}");
     // The caustic is really there: brighter than the same floor without photons.
     let mut dark = glass_scene(0);
     dark.settings.photons.count = 0;
-    let accel = build(&dark);
+    let accel = build(&dark, AccelKind::Brute);
     let plan = RenderPlan::new(&dark);
     assert_eq!(plan.photons, PhotonPlan::CountZero);
     let without = render_with_photons(&dark, accel.as_ref(), &plan, None, &|_, _| {}).film;
@@ -191,7 +170,7 @@ fn more_photons_give_lower_error_against_a_reference() {
 
 fn render_caustic(count: u64) -> Film {
     let scene = glass_scene(count);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::Brute);
     let plan = RenderPlan::new(&scene);
     render(&scene, accel.as_ref(), &plan, &|_, _| {}).film
 }
@@ -199,7 +178,7 @@ fn render_caustic(count: u64) -> Film {
 #[test]
 fn photon_maps_and_images_are_identical_for_one_and_two_threads() {
     let scene = glass_scene(30_000);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::Brute);
     let plan = RenderPlan::new(&scene);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -217,7 +196,7 @@ fn photon_maps_and_images_are_identical_for_one_and_two_threads() {
 fn no_photon_pass_without_a_specular_caster() {
     let mut scene = glass_scene(10_000);
     scene.materials[1] = Material::diffuse("not glass", Vec3A::splat(0.5));
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::Brute);
     let plan = RenderPlan::new(&scene);
     assert_eq!(plan.photons, PhotonPlan::NoSpecularCaster);
     assert!(plan.to_string().contains("photon pass: skipped (no specular caster)"));

@@ -5,7 +5,9 @@
 //! (adaptive sampling included), and across tiles and samples shards; bad
 //! settings and photon files are refused with exit code 2.
 
-use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+mod common;
+
+use caustic::accel::AccelKind;
 use caustic::film::shard::samples_merge_bound;
 use caustic::film::{Accumulation, ShardId, ShardMode, ShardSet};
 use caustic::integrator::plan::{PhotonPlan, ProgressivePlan};
@@ -16,18 +18,16 @@ use caustic::scene::{
     load_scene, AreaLight, Camera, Dielectric, GatherMode, Light, Material, Object, Quad, RenderSettings,
     SampleSharing, Scene, Shape, Sphere,
 };
+use common::cli::caustic;
+use common::metrics::{mean_of, rmse};
+use common::scenes::build;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 const SCENE: &str = "scenes/test/caustic.toml";
 
 fn scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE)
-}
-
-fn build(scene: &Scene) -> Box<dyn Accel> {
-    accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap()
 }
 
 /// A glass sphere over a floor under a small area light (its caustic
@@ -92,7 +92,7 @@ fn glass_scene(spp: u32, count: u64, seed: u64) -> Scene {
 /// photons (the photon gather draws no random numbers, so every other
 /// term is the same sample for sample), per channel.
 fn caustic_only(scene: &Scene) -> Vec<f64> {
-    let accel = build(scene);
+    let accel = build(scene, AccelKind::KdTree);
     let plan = RenderPlan::new(scene);
     assert!(plan.runs_photons());
     let with = render(scene, accel.as_ref(), &plan, &|_, _| {}).film;
@@ -118,17 +118,6 @@ fn progressive(mut scene: Scene) -> Scene {
 fn fixed_radius(mut scene: Scene) -> Scene {
     scene.settings.photons.k = caustic::scene::load::MAX_PHOTON_GATHER;
     scene
-}
-
-/// Root mean square difference.
-fn rmse(a: &[f64], b: &[f64]) -> f64 {
-    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
-}
-
-fn mean_of(images: &[Vec<f64>]) -> Vec<f64> {
-    (0..images[0].len())
-        .map(|i| images.iter().map(|im| im[i]).sum::<f64>() / images.len() as f64)
-        .collect()
 }
 
 /// Photons per sample index in the comparisons: a fixed map of
@@ -227,7 +216,7 @@ fn plan_shares_the_photons_and_says_what_it_skips() {
     );
     assert!(text.contains("precomputed irradiance skipped"), "{text}");
     // Rendering traces one map per sample index and counts them all.
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
     let stats = out.stats.photons.as_ref().unwrap();
     assert_eq!((stats.maps, stats.emitted), (11, 11 * 1818));
@@ -241,7 +230,7 @@ fn plan_shares_the_photons_and_says_what_it_skips() {
 #[test]
 fn same_image_on_one_and_three_threads() {
     let scene = caustic_scene(6);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -260,7 +249,7 @@ fn same_image_on_one_and_three_threads() {
 /// Stops a render after `stop_at` samples (mid-pass: the progress callback
 /// runs after each tile), then resumes it.
 fn interrupt_and_resume(scene: &Scene, stop_at: u64) -> (Accumulation, Accumulation) {
-    let accel = build(scene);
+    let accel = build(scene, AccelKind::KdTree);
     let plan = RenderPlan::new(scene);
     let (w, h) = (plan.width, plan.height);
     let cancel = AtomicBool::new(false);
@@ -290,7 +279,7 @@ fn interrupt_and_resume(scene: &Scene, stop_at: u64) -> (Accumulation, Accumulat
 #[test]
 fn interrupted_and_resumed_is_bit_identical() {
     let scene = caustic_scene(11);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
     let total = 40 * 30 * 11;
@@ -306,7 +295,7 @@ fn interrupted_and_resumed_is_bit_identical() {
     let mut adaptive = caustic_scene(24);
     adaptive.settings.noise_threshold = Some(0.05);
     adaptive.settings.min_spp = 8;
-    let accel = build(&adaptive);
+    let accel = build(&adaptive, AccelKind::KdTree);
     let plan = RenderPlan::new(&adaptive);
     let reference = render(&adaptive, accel.as_ref(), &plan, &|_, _| {}).accumulation;
     assert!(reference.converged.iter().any(|&c| c), "some pixels stop early");
@@ -386,14 +375,6 @@ fn shards_merge_to_the_single_render() {
     // One sample per shard: each shard traces one map, the merge adds in order.
     let merged = shards(&base, 8, ShardMode::Samples, dir.path());
     assert!(merged == reference, "one sample per shard");
-}
-
-fn caustic(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the caustic binary runs")
 }
 
 #[test]

@@ -2,13 +2,16 @@
 //! where the noise is low, the image keeps its expected value, and renders
 //! stay deterministic across thread counts and across interrupt and resume.
 
-use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+mod common;
+
+use caustic::accel::AccelKind;
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::{render, render_with_control, RenderControl, RenderOutput, RenderPlan};
 use caustic::math::{SamplerKind, Vec3A};
 use caustic::scene::{load_scene, AdaptiveGoal, IntegratorKind, Light, Scene};
+use common::cli::caustic;
+use common::scenes::build;
 use std::path::Path;
-use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The test Cornell-like scene with glass and an area light, path traced,
@@ -26,14 +29,10 @@ fn adaptive_scene(threshold: f32) -> Scene {
     scene
 }
 
-fn build(scene: &Scene) -> Box<dyn Accel> {
-    accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap()
-}
-
 #[test]
 fn pixels_stop_where_the_noise_is_low_and_the_error_estimate_follows_the_noise() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     assert_eq!(plan.sampler, SamplerKind::Sobol);
     let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
@@ -66,7 +65,7 @@ fn adaptive_stopping_does_not_bias_the_image() {
     s.width = 24;
     s.height = 18;
     s.min_spp = 8;
-    let accel = build(&reference_scene);
+    let accel = build(&reference_scene, AccelKind::KdTree);
     let reference = render(
         &reference_scene,
         accel.as_ref(),
@@ -104,7 +103,7 @@ fn adaptive_stopping_does_not_bias_the_image() {
 #[test]
 fn image_goal_spends_samples_in_proportion_to_the_noise() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let pixel = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
     let mut image_scene = scene.clone();
     image_scene.settings.adaptive_goal = AdaptiveGoal::Image;
@@ -143,7 +142,7 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
             a.samples = 1;
         }
     }
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let rendered = |spp: u32, limit: Option<u32>, seed: u64| {
         let mut s = scene.clone();
         s.settings.spp = spp;
@@ -181,7 +180,7 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
 #[test]
 fn adaptive_renders_are_deterministic_across_threads_and_resume() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
     let a = pool(1).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
@@ -244,18 +243,10 @@ fn adaptive_white_furnace_renders_the_environment() {
     for m in &mut scene.materials {
         *m = caustic::scene::Material::diffuse(&m.name, Vec3A::ONE);
     }
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
     let mean = out.film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / out.film.pixels.len() as f64;
     assert!((mean - 0.5).abs() < 0.005, "{mean}");
-}
-
-fn caustic(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
 }
 
 /// `--exr` carries each pixel's estimated error and sample count;

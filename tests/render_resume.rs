@@ -3,7 +3,9 @@
 //! checkpoint file round trip) and continued ends bit-identical to an
 //! uninterrupted render with the same seed.
 
-use caustic::accel::{self, Accel, AccelKind, AccelOptions};
+mod common;
+
+use caustic::accel::{Accel, AccelKind};
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::photon::{PhotonMap, SiteCache};
 use caustic::integrator::render::PixelStrata;
@@ -13,6 +15,7 @@ use caustic::math::rng::mix64;
 use caustic::math::sampling::{grid_for, permute, stratified};
 use caustic::math::{Rng, Sampler, Vec3, Vec3A};
 use caustic::scene::{load_scene, Scene};
+use common::scenes::build;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
@@ -31,10 +34,6 @@ fn caustic_scene(spp: u32) -> Scene {
     scene
 }
 
-fn build(scene: &Scene) -> Box<dyn Accel> {
-    accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap()
-}
-
 fn continue_from(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, start: Accumulation) -> RenderOutput {
     render_with_control(scene, accel, plan, start, &RenderControl::to_completion(&|_, _| {}))
 }
@@ -42,7 +41,7 @@ fn continue_from(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, start: Acc
 #[test]
 fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
     let scene = caustic_scene(11);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     assert!(plan.spread(), "the test should cover spread sampling");
     let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
@@ -94,7 +93,7 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
 #[test]
 fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
     let scene = caustic_scene(6);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
 
@@ -139,7 +138,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
 #[test]
 fn every_periodic_snapshot_resumes_to_the_same_image() {
     let scene = caustic_scene(9);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let snapshots = Mutex::new(Vec::new());
     let save = |acc: &Accumulation| snapshots.lock().unwrap().push(acc.clone());
@@ -178,7 +177,7 @@ fn every_periodic_snapshot_resumes_to_the_same_image() {
 #[test]
 fn a_render_cancelled_before_it_starts_takes_no_sample() {
     let scene = caustic_scene(4);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let cancel = AtomicBool::new(true);
     let control = RenderControl {
@@ -238,7 +237,7 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
 #[test]
 fn passes_give_the_single_loop_image_bit_for_bit() {
     let scene = caustic_scene(13);
-    let accel = build(&scene);
+    let accel = build(&scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene);
     let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
     let expected = single_loop_film(&scene, accel.as_ref(), &plan, out.photon_map.as_deref());

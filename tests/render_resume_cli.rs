@@ -3,25 +3,14 @@
 //! finishes it bit-identical to an uninterrupted render, mismatched
 //! resumes and unwritable outputs are refused before rendering (exit 2).
 
+mod common;
+
+use common::cli::{caustic, command, stderr, stdout};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const SCENE: &str = "scenes/test/caustic.toml";
-
-fn caustic_cmd(args: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_caustic"));
-    c.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
-    c
-}
-
-fn caustic(args: &[&str]) -> Output {
-    caustic_cmd(args).output().expect("the caustic binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -82,7 +71,7 @@ fn sigint_writes_partial_image_and_checkpoint_and_resume_is_bit_identical() {
         "--checkpoint-every",
         "0.05",
     ]);
-    let child = caustic_cmd(&args)
+    let child = command(&args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -106,12 +95,12 @@ fn sigint_writes_partial_image_and_checkpoint_and_resume_is_bit_identical() {
         .unwrap();
     assert!(kill.success());
     let out = child.wait_with_output().unwrap();
-    let err = text(&out.stderr);
+    let err = stderr(&out);
     assert_eq!(out.status.code(), Some(130), "stderr: {err}");
     assert!(err.contains("interrupted by SIGINT"), "{err}");
     assert!(err.contains("samples done"), "{err}");
     assert!(err.contains("--resume"), "{err}");
-    assert!(text(&out.stdout).contains("written:"), "{}", text(&out.stdout));
+    assert!(stdout(&out).contains("written:"), "{}", stdout(&out));
     // The partial outputs are whole, valid images; no temporary file is left.
     let png = image::open(&part_png).unwrap().to_rgb8();
     assert_eq!(png.dimensions(), (64, 48));
@@ -137,7 +126,7 @@ fn sigint_writes_partial_image_and_checkpoint_and_resume_is_bit_identical() {
         "--exr",
         s(&resumed),
     ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(out.status.success(), "{}", stderr(&out));
     let after = caustic::film::read_checkpoint(&ckpt).unwrap();
     assert!(
         after.accumulation.is_complete(256),
@@ -149,7 +138,7 @@ fn sigint_writes_partial_image_and_checkpoint_and_resume_is_bit_identical() {
     args.extend(SETTINGS);
     args.extend(["--exr", s(&reference)]);
     let out = caustic(&args);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         exr_bits(&resumed) == exr_bits(&reference),
         "the resumed image differs from the uninterrupted render"
@@ -182,8 +171,8 @@ fn resuming_a_different_render_is_refused() {
         "--checkpoint",
         s(&ckpt),
     ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).contains("(checkpoint)"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("(checkpoint)"));
     let again = dir.path().join("b.exr");
     let resume = |extra: &[&str], scene: &str| {
         let mut args = vec!["render", scene, "--quiet", "--resume", s(&ckpt), "--exr", s(&again)];
@@ -192,7 +181,7 @@ fn resuming_a_different_render_is_refused() {
     };
     // Resuming a finished render just writes it again.
     let out = resume(&[], "scenes/test/shadow.toml");
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(out.status.success(), "{}", stderr(&out));
     assert!(exr_bits(&again) == exr_bits(&dir.path().join("a.exr")));
     // Other settings, another scene: exit 2, saying what differs.
     for (extra, scene, needle) in [
@@ -214,10 +203,10 @@ fn resuming_a_different_render_is_refused() {
         ),
     ] {
         let out = resume(extra, scene);
-        let err = text(&out.stderr);
+        let err = stderr(&out);
         assert_eq!(out.status.code(), Some(2), "{extra:?} {scene}: {err}");
         assert!(err.contains("different render") && err.contains(needle), "{err}");
-        assert!(text(&out.stdout).is_empty());
+        assert!(stdout(&out).is_empty());
     }
     // Not a checkpoint at all.
     let out = resume(&[], "scenes/test/shadow.toml");
@@ -225,9 +214,9 @@ fn resuming_a_different_render_is_refused() {
     let out = caustic(&["render", "scenes/test/shadow.toml", "--resume", s(&again)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(
-        text(&out.stderr).contains("not a valid caustic checkpoint"),
+        stderr(&out).contains("not a valid caustic checkpoint"),
         "{}",
-        text(&out.stderr)
+        stderr(&out)
     );
 }
 
@@ -251,13 +240,13 @@ fn unwritable_outputs_are_reported_before_rendering() {
         }
         args.extend([flag, path]);
         let out = caustic(&args);
-        let err = text(&out.stderr);
+        let err = stderr(&out);
         assert_eq!(out.status.code(), Some(2), "{flag} {path}: {err}");
         assert!(err.contains(path) && err.contains("cannot write output"), "{err}");
-        assert!(text(&out.stdout).is_empty(), "nothing was rendered");
+        assert!(stdout(&out).is_empty(), "nothing was rendered");
         assert!(!ok_png.exists());
     }
     let out = caustic(&["render", "scenes/test/shadow.toml", "--checkpoint-every", "0"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(text(&out.stderr).contains("--checkpoint-every"));
+    assert!(stderr(&out).contains("--checkpoint-every"));
 }

@@ -6,14 +6,17 @@
 //! refused for another render; the command line end to end (exit codes,
 //! byte-identical PNG).
 
+mod common;
+
 use caustic::accel::AccelKind;
 use caustic::film::shard::samples_merge_bound;
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, ShardId, ShardMode, ShardSet};
 use caustic::job::{self, merge_partials, JobError, JobHooks, MergeRequest, RenderJob, RenderRequest};
 use caustic::scene::IntegratorKind;
+use common::cli::{caustic_with_env, stderr};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 const SCENE: &str = "scenes/test/caustic.toml";
@@ -433,27 +436,6 @@ fn shard_auto_reads_slurm_and_kubernetes() {
     );
 }
 
-fn caustic(args: &[&str], envs: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_caustic"));
-    c.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
-    for var in [
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-        "SLURM_ARRAY_TASK_MAX",
-        "SLURM_ARRAY_TASK_STEP",
-        "JOB_COMPLETION_INDEX",
-    ] {
-        c.env_remove(var);
-    }
-    c.envs(envs.iter().copied());
-    c.output().expect("the caustic binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 #[test]
 fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
     let dir = tempfile::tempdir().unwrap();
@@ -479,7 +461,7 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
     };
     let run = |args: Vec<String>, envs: &[(&str, &str)]| {
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-        caustic(&refs, envs)
+        caustic_with_env(&refs, envs)
     };
     let single = run(with(&["-o", &p("single.png")]), &[]);
     assert!(single.status.success(), "{}", stderr(&single));
@@ -493,7 +475,7 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
     assert!(o.status.success(), "{}", stderr(&o));
     let meta = caustic::film::read_checkpoint_meta(Path::new(&p("part-2.exr"))).unwrap();
     assert_eq!(meta.shard.unwrap().indices, [2]);
-    let o = caustic(
+    let o = caustic_with_env(
         &[
             "merge",
             &p("part-0.exr"),
@@ -520,11 +502,11 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
         );
     };
     refused(
-        caustic(&["merge", &p("part-0.exr"), &p("part-2.exr"), "-o", &p("x.png")], &[]),
+        caustic_with_env(&["merge", &p("part-0.exr"), &p("part-2.exr"), "-o", &p("x.png")], &[]),
         "missing shard 1 of 3",
     );
     refused(
-        caustic(
+        caustic_with_env(
             &[
                 "merge",
                 &p("part-0.exr"),
@@ -584,7 +566,7 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
     );
 
     // A photon file traced once, loaded by a shard; refused for another seed.
-    let o = caustic(
+    let o = caustic_with_env(
         &[
             "photons",
             SCENE,
@@ -604,7 +586,7 @@ fn command_line_shards_merge_to_the_same_png_and_refusals_exit_2() {
         &[],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = caustic(
+    let o = caustic_with_env(
         &[
             "merge",
             &p("part-0.exr"),

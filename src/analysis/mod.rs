@@ -1,7 +1,7 @@
 //! Measurements over the renderer's components: [`crosscheck`], which casts
 //! seeded rays through two accelerators and reports where they disagree,
 //! [`rays`], seeded ray
-//! sets and their timed queries, [`bench`], `caustic bench`, [`converge`],
+//! sets and their timed queries, [`mod@bench`], `caustic bench`, [`converge`],
 //! run time against error over increasing budgets (with its log-log
 //! [`plot`]), and [`stress`], the numerical stress cases (`caustic stress`).
 

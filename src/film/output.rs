@@ -134,6 +134,22 @@ pub(crate) fn write_atomically(
 
 /// Writes the tone-mapped film as an 8-bit sRGB PNG (tone curve and exposure
 /// from `settings`), atomically.
+///
+/// ```
+/// use caustic::film::{write_exr, write_png, Film, OutputSettings};
+/// use caustic::math::Vec3;
+///
+/// let mut film = Film::new(4, 2);
+/// film.set(1, 0, Vec3::new(4.0, 1.0, 0.25)); // linear radiance, HDR
+/// let dir = tempfile::tempdir()?;
+/// write_png(&dir.path().join("a.png"), &film, &OutputSettings::default())?;
+/// write_exr(&dir.path().join("a.exr"), &film)?; // linear, unclamped
+/// // An unwritable path is an error naming it, and leaves nothing behind.
+/// let bad = dir.path().join("no-such-dir/a.png");
+/// assert!(write_png(&bad, &film, &OutputSettings::default()).is_err());
+/// assert!(!bad.exists());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_png(path: &Path, film: &Film, settings: &OutputSettings) -> Result<(), OutputError> {
     use image::ImageEncoder;
     let bytes = tonemap_to_srgb8(film, settings);

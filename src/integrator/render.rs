@@ -40,12 +40,9 @@ use std::time::{Duration, Instant};
 pub const TILE_SIZE: u32 = 32;
 
 /// Fewest samples per pixel one pass adds (the first pass takes this many).
-/// Each pass costs a little per pixel (the pixel's strata keys, its
-/// state loaded and stored, one lock per tile): about 140 instructions,
-/// against about 2,000-5,000 per sample on the Cornell box without photons.
-/// Measured with callgrind (release, 1 thread, `--photons 0`): 640×360 at
-/// 4 spp (one pass, as before passes existed) +0.12% instructions; 320×180
-/// at 20 spp (passes to 4, 8, 16, 20) +0.98%; with photons less still.
+/// Each pass costs a little per pixel (the pixel's strata keys, its state
+/// loaded and stored, one lock per tile), small against a sample's cost
+/// (docs/benchmarks-history.md, "Render passes").
 pub const MIN_PASS_SAMPLES: u32 = 4;
 
 /// Most samples per pixel one pass adds. Passes double the sample count from

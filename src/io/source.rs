@@ -676,7 +676,7 @@ mod tests {
         while text.len() < 3 * CHUNK {
             let t = format!("{}", k * 7919 % 1_000_003);
             text.push_str(&t);
-            text.push(if k % 5 == 0 { '\n' } else { ' ' });
+            text.push(if k.is_multiple_of(5) { '\n' } else { ' ' });
             expected.push(t);
             k += 1;
         }

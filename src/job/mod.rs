@@ -1,7 +1,10 @@
 //! A render job: one scene rendered with one accelerator, from a fresh or
-//! resumed accumulation, to PNG / EXR / checkpoint files. The command line,
-//! the benchmarks and the analysis commands all render through it, so
-//! resume, fingerprints, checkpoints and outputs behave the same everywhere.
+//! resumed accumulation, to PNG / EXR / checkpoint files. `caustic render`
+//! (whole, resumed or sharded) goes through it, so resume, fingerprints,
+//! checkpoints and outputs behave the same for every such render. The measurements
+//! (`analysis::bench`, `converge`, `stress`) and the viewer's render thread
+//! call the integrator directly: they time or cancel the render alone and
+//! write no checkpoint (ARCHITECTURE.md, "Doors to rendering").
 //!
 //! A job is made in two steps so that bad input is refused before any work:
 //! [`RenderJob::prepare`] loads the scene, applies the overrides (checked like
@@ -259,6 +262,22 @@ impl JobError {
 
 /// A job ready to run: the scene with its final settings, the accelerator,
 /// the accumulation to continue and the outputs, all checked.
+///
+/// ```
+/// use caustic::accel::AccelKind;
+/// use caustic::job::{JobHooks, RenderJob, RenderRequest};
+///
+/// let dir = tempfile::tempdir()?;
+/// let mut request = RenderRequest::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/test/shadow.toml"));
+/// request.overrides.width = Some(32);
+/// request.overrides.height = Some(24);
+/// request.accel = Some(AccelKind::KdTree);
+/// request.png = Some(dir.path().join("shadow.png"));
+/// let report = RenderJob::prepare(&request)?.run(&JobHooks::silent())?;
+/// assert!(report.output.complete);
+/// assert!(dir.path().join("shadow.png").is_file());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct RenderJob {
     /// The scene, with the overrides applied.
     pub scene: Scene,
@@ -518,7 +537,7 @@ impl RenderJob {
     }
 
     /// Like [`run`](Self::run), with an accelerator built by the caller
-    /// (benchmarks time the build apart; the viewer keeps it across renders).
+    /// (to time the build apart, or to build it once for several jobs).
     pub fn run_with(self, accel: &dyn Accel, hooks: &JobHooks) -> Result<JobReport, JobError> {
         let stats = accel.stats();
         let plan = self.plan();

@@ -93,7 +93,7 @@ impl Sampler {
             SamplerKind::Sobol => {
                 let d = self.dimension;
                 self.dimension += 1;
-                if d % 4 == 0 {
+                if d.is_multiple_of(4) {
                     let (block, set) = (d / SOBOL_DIMENSIONS, (d % SOBOL_DIMENSIONS) / 4);
                     let seed = if block == 0 {
                         self.seed

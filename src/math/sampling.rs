@@ -159,7 +159,7 @@ fn spread_every_third(x: u32) -> u64 {
 pub fn grid_for(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let mut nx = (n as f32).sqrt() as u32;
-    while nx > 1 && n % nx != 0 {
+    while nx > 1 && !n.is_multiple_of(nx) {
         nx -= 1;
     }
     (nx.max(1), n / nx.max(1))

@@ -148,9 +148,8 @@ impl KdTree {
     /// queries, whose answer does not depend on the order. A shadow ray
     /// starts on a surface, among the triangles around its origin that it
     /// leaves behind, while an occluder is met at its first surface from
-    /// the far end: on the dragon's occluded shadow rays this order tests
-    /// 6 triangles instead of 13, and the bench's shadow rays run about
-    /// 10 % faster.
+    /// the far end, so fewer triangles are tested before it
+    /// (docs/benchmarks-history.md, "KD-tree shadow rays against Embree").
     ///
     /// Rays with zero direction components are exact: a ray parallel to a split
     /// plane visits only the side holding its origin, or both sides when it lies

@@ -346,7 +346,7 @@ mod tests {
 
     impl Wrong {
         fn planted(&self, ray: &Ray) -> bool {
-            ray.origin.x.to_bits() % self.modulus == 0
+            ray.origin.x.to_bits().is_multiple_of(self.modulus)
         }
     }
 

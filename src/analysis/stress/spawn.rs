@@ -48,10 +48,9 @@
 //! A shadow ray from there toward a light on the incident side goes into the
 //! sphere and must hit its far side at the chord `2r·sin α`, where `α` is its
 //! angle to the tangent plane; the grazing shadow rays (`α` down to 1e-6 rad)
-//! make that chord arbitrarily short. An earlier "no re-hit within `0.5 s`"
-//! rule counted these correct hits as failures (≈0.02% of shadow rays, the
-//! same for every backend, at every scale: replayed in f64, every one was
-//! the exit root of an origin inside the sphere).
+//! make that chord arbitrarily short, so a "no re-hit within `0.5 s`" rule
+//! would count these correct hits (exit roots of origins inside the sphere,
+//! as a replay in f64 confirms) as failures.
 //!
 //! For shadow rays, an `occluded` answer that disagrees with the closest hit
 //! below `t_max` also fails. A non-finite hit point, error bound or normal
@@ -498,7 +497,7 @@ fn leak_trial(scene: &Scene, accel: &dyn Accel, c: Vec3A, rng: &mut Rng) -> Opti
     let hit = accel.intersect(&ray, f32::INFINITY)?;
     let si = scene.surface_interaction(&ray, &hit);
     let face = box_face(scene, &hit);
-    let (axis, side) = (face / 2, if face % 2 == 0 { -1.0f32 } else { 1.0 });
+    let (axis, side) = (face / 2, if face.is_multiple_of(2) { -1.0f32 } else { 1.0 });
     // A target on the box surface, off the starting face: coordinates in
     // {−1, +1} on the fixed axes, free in (−1, 1) on the others.
     let kind = match rng.below(4) {

@@ -1,13 +1,14 @@
 //! A point set split into spatial chunks, one kiddo immutable k-d tree per
 //! chunk, built in parallel. kiddo builds a tree on one thread, and its
 //! build (median selects through an index array, one random read of the
-//! points per comparison) slows down as a tree outgrows the caches: here
-//! 8.9M points took 190 ns each, 277k points about 80 ns. So large maps are cut
+//! points per comparison) slows down as a tree outgrows the caches (more
+//! than twice the time per point at 8.9M points as at 277k;
+//! docs/benchmarks-history.md). So large maps are cut
 //! into chunks of about [`CHUNK_TARGET`] points, up to 256 chunks, and the
 //! chunks' trees built at once with rayon.
 //!
 //! The cuts are planned on a fixed sample of the points (every
-//! [`CUT_SAMPLE_STRIDE`]-th): median cuts across the longest axis of each
+//! `CUT_SAMPLE_STRIDE`-th): median cuts across the longest axis of each
 //! part of the sample, ties broken by index, down to [`chunk_depth`] levels.
 //! Every point then finds its chunk by walking those cuts, and is scattered
 //! into it by a counting sort. The structure is a fixed function of the
@@ -85,7 +86,7 @@ const ALL_BELOW: Split = Split {
 /// `j` has children `2j + 1` below and `2j + 2` above), whose `2^depth`
 /// leaves are the chunks, numbered left to right (below before above):
 /// their concatenation order. Walked without branches when points are
-/// located (8 levels of unpredictable branches took 47 ns per point).
+/// located: the branch at each level is unpredictable.
 struct Cuts {
     depth: u32,
     splits: Vec<Split>,
@@ -127,7 +128,7 @@ impl Cuts {
 
     /// The chunks of `points` (whose first index is `first`), into `out`.
     /// Eight points descend side by side: one point's descent is a chain
-    /// of dependent loads (30 ns for 8 levels), eight overlap.
+    /// of dependent loads, eight chains overlap.
     fn locate(&self, points: &[[f32; 3]], first: u32, out: &mut Vec<u8>) {
         const LANES: usize = 8;
         let interior = self.splits.len();
@@ -231,12 +232,11 @@ impl ChunkedTree {
     /// in `points` of the point that the tree calls `j`.
     ///
     /// Each chunk's points are sorted along a Z-order curve before kiddo
-    /// builds its tree ([`morton_sort`]): kiddo's build is cache-bound (it
+    /// builds its tree (`morton_sort`): kiddo's build is cache-bound (it
     /// runs about three times faster over coherent points than over
     /// shuffled ones), and the items of a leaf, hence the payloads a query
-    /// reads, become neighbours in memory. At 100M photons (71M stored)
-    /// kiddo's builds went 4.2 s → 3.2 s and the irradiance precompute
-    /// 7.8 s → 6.3 s, for 1.2 s of sorting.
+    /// reads, become neighbours in memory (the figures:
+    /// docs/benchmarks-history.md, "The photon pass").
     ///
     /// With `keep_points`, each chunk keeps its points in item order (12
     /// bytes each) for [`within_points`](Self::within_points).

@@ -42,10 +42,10 @@ pub fn to_tree(rotation: &Mat3A, p: Vec3A) -> [f32; 3] {
     (*rotation * p).to_array()
 }
 
-/// Points per leaf of the k-d tree. 64 against 32: the 64-nearest gathers
-/// of the irradiance precompute visit fewer leaves (underwater at 20M
-/// photons: 2.89–2.91 s → 2.49–2.66 s) and kiddo's build has one level
-/// fewer; 128 was slower again (2.99–3.11 s).
+/// Points per leaf of the k-d tree: with the 64-nearest gathers of the
+/// irradiance precompute, leaves of 64 mean fewer leaves visited and one
+/// build level fewer than 32, while 128 costs more per leaf than it saves
+/// (docs/benchmarks-history.md, "The photon pass").
 pub const BUCKET: usize = 64;
 
 /// Bytes held per stored photon once the map is built (see the module docs).

@@ -1,13 +1,22 @@
 //! Photon-mapped caustics (Jensen 1996; the original report's §5.2): a
 //! first pass emits photons toward the specular objects and stores those
 //! that reach a diffuse surface after at least one specular bounce (the
-//! caustic map); the Whitted integrator then adds the cone-filtered
+//! caustic map; with the path integrator also a volume map of the light
+//! scattered in a medium); the integrators then add the cone-filtered
 //! irradiance estimate at diffuse surfaces.
 //!
-//! - [`emit`]: emission restricted to the specular casters and tracing;
-//! - [`map`]: the compact photon records and kiddo's immutable k-d tree;
+//! - [`emit`]: emission restricted to the specular casters and tracing,
+//!   under Whitted's or the path integrator's scattering rules;
+//! - [`map`]: the compact photon records and the surface and volume maps;
+//! - [`chunked`]: a point set cut into spatial chunks, one kiddo k-d tree
+//!   per chunk, built in parallel;
 //! - [`gather`]: the k-nearest cone-filter estimate, or every photon
 //!   within a fixed radius;
+//! - [`neighbourhood`]: exact k-nearest queries answered from a cached
+//!   neighbourhood (triangle inequality);
+//! - [`precomputed`]: irradiance precomputed at every few stored photons
+//!   (Christensen 1999) and the per-thread site cache;
+//! - [`mod@file`]: photon files (`caustic photons`, `--photon-map`);
 //! - [`progressive`]: progressive photon mapping's schedule (Knaus &
 //!   Zwicker 2011): one independent map per sample index and its radius.
 //!
@@ -230,8 +239,8 @@ pub fn trace_photons_with(
     let tracer = PhotonTracer::with_rules(scene, accel, count, rules).with_stream(stream);
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
-    // arrive), they never move while growing; growth by doubling copied
-    // and page-faulted them anew (2.8 GiB of faults at 100M photons).
+    // arrive), they never move while growing; growth by doubling would
+    // copy and page-fault them anew at every step.
     let capacity = usize::try_from(count).unwrap_or(usize::MAX);
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(capacity);
     let mut records: Vec<PhotonRecord> = Vec::with_capacity(capacity);

@@ -1,6 +1,6 @@
 //! Exact k-nearest queries answered from cached neighbourhoods.
 //!
-//! A [`Neighbourhood`] holds every point within `R` of a centre `c`. For a
+//! A `Neighbourhood` holds every point within `R` of a centre `c`. For a
 //! query at distance `d` from `c`, every point within `R − d` of the query
 //! is in it (triangle inequality). So if the `k` nearest among the cached
 //! points reach only `ρ ≤ R − d` (or, with fewer than `k` within the

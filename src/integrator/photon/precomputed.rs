@@ -9,7 +9,7 @@
 //!
 //! - the nearest site lies within its own gather radius of the point (the
 //!   two estimates would share most of their photons; for sites thinned
-//!   below one per `k/8` photons, a multiple of it: see [`reach2`]), and
+//!   below one per `k/8` photons, a multiple of it: see `reach2`), and
 //! - the sites' normals are within [`NORMAL_COS`] of the point's
 //!   (Christensen's normal check: a corner's two walls, or a thin wall's
 //!   two sides, keep their own irradiance);
@@ -236,7 +236,7 @@ impl PhotonMap {
         // Sites in Z-order over the map's bounds: consecutive gathers (one
         // task's) then lie side by side and walk the same parts of the
         // tree; emission order is coherent in direction space only, and
-        // consecutive sites lay metres apart (Z-order: 35% faster).
+        // consecutive sites would lie metres apart.
         let bounds = self.bounds();
         let top = (1u32 << 21) as f32 - 1.0;
         let scale = Vec3A::splat(top) / bounds.extent().max(Vec3A::splat(f32::MIN_POSITIVE));

@@ -1,14 +1,42 @@
-//! Test scenes built in code for the Embree tests: an icosphere instanced
-//! several times with rotations and scales, a random triangle soup, spheres
-//! and quads, plus seeded ray generators.
-#![allow(dead_code)]
+//! Scenes for the tests: the scene files by path, accelerators built for
+//! them, quads, and the cross-check scene built in code (an icosphere
+//! instanced several times with rotations and scales, a random triangle
+//! soup, spheres and quads) with seeded ray generators.
 
+use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Ray, Transform, Vec3, Vec3A};
 use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 pub use caustic::geometry::generate::icosphere;
+
+/// A path relative to the crate root (`scenes/test/caustic.toml`).
+pub fn path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// The scene file at `relative` (to the crate root), loaded.
+pub fn load(relative: &str) -> Scene {
+    let p = path(relative);
+    caustic::scene::load_scene(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// `kind` built on `scene` with the default options.
+pub fn build(scene: &Scene, kind: AccelKind) -> Box<dyn Accel> {
+    accel::build(scene, kind, &AccelOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", kind.name()))
+}
+
+/// A quad object `corner + a·u + b·v` of material index `material`,
+/// facing `u × v`.
+pub fn quad(corner: [f32; 3], u: [f32; 3], v: [f32; 3], material: u32) -> Object {
+    Object {
+        name: "quad".into(),
+        shape: Shape::Quad(Quad::new(corner.into(), u.into(), v.into()).unwrap()),
+        material,
+    }
+}
 
 /// `n` random triangles in the box [-1, 1]³ (overlapping, of all shapes).
 pub fn soup(n: usize, seed: u64) -> Mesh {
@@ -143,7 +171,7 @@ pub fn ray(scene: &Scene, seed: u64, i: u64) -> Ray {
     let lo = b.min - b.extent() * 0.2;
     let ext = b.extent() * 1.4;
     let origin = lo + ext * Vec3A::new(rng.f32(), rng.f32(), rng.f32());
-    if i % 2 == 0 {
+    if i.is_multiple_of(2) {
         return Ray::new(origin, uniform_dir(&mut rng));
     }
     let k = rng.below(scene.objects.len() as u32) as usize;
