@@ -124,23 +124,6 @@ fn texture_scene(file: &str) -> String {
     )
 }
 
-/// A PNG signature and an IHDR chunk announcing 100000 × 100000 RGBA texels.
-fn huge_png_header() -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend_from_slice(&13u32.to_be_bytes());
-    png.extend_from_slice(&ihdr);
-    png.extend_from_slice(&flate2::Crc::new().sum().to_be_bytes());
-    let mut crc = flate2::Crc::new();
-    crc.update(&ihdr);
-    let n = png.len();
-    png[n - 4..].copy_from_slice(&crc.sum().to_be_bytes());
-    png
-}
-
 /// One hostile input.
 struct Case {
     /// Identifier, listed in `docs/hostile-inputs.md`.
@@ -621,7 +604,7 @@ fn cases() -> Vec<Case> {
             what: "a PNG header announcing 100000 × 100000 texels",
             expect: Some(&["scene.toml:15:", "texture `t.png`: refused", "textures are at most 32768×32768 texels"]),
             setup: |d| {
-                write(d, "t.png", huge_png_header());
+                write(d, "t.png", common::images::huge_png_header());
                 scene_text(d, &texture_scene("t.png"))
             },
         },

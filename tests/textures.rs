@@ -3,6 +3,8 @@
 //! textured colours in a render, normal maps, alpha cutouts on every
 //! accelerator, and the errors bad textures give.
 
+mod common;
+
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Ray, Vec2, Vec3A};
@@ -429,7 +431,7 @@ fn bad_textures_are_refused_with_their_place() {
         &scene("diffuse = { type = \"image\", file = \"text.png\" }"),
     );
     assert!(e.contains("text.png") && e.contains("scene.toml:7:"), "{e}");
-    std::fs::write(dir.path().join("bomb.png"), huge_png_header()).unwrap();
+    std::fs::write(dir.path().join("bomb.png"), common::images::huge_png_header()).unwrap();
     let e = error(
         dir.path(),
         &scene("diffuse = { type = \"image\", file = \"bomb.png\" }"),
@@ -447,30 +449,6 @@ fn bad_textures_are_refused_with_their_place() {
     );
 }
 
-/// A PNG signature and an IHDR chunk announcing 100000 × 100000 RGBA texels.
-fn huge_png_header() -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
-    let mut crc = 0xffff_ffffu32;
-    for &b in &ihdr {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                0xedb8_8320 ^ (crc >> 1)
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend_from_slice(&13u32.to_be_bytes());
-    png.extend_from_slice(&ihdr);
-    png.extend_from_slice(&(!crc).to_be_bytes());
-    png
-}
-
 /// The command line exits with code 2 on a missing texture, and writes nothing.
 #[test]
 fn the_cli_refuses_a_missing_texture_with_code_2() {
@@ -485,15 +463,9 @@ fn the_cli_refuses_a_missing_texture_with_code_2() {
     )
     .unwrap();
     let out_png = dir.path().join("out.png");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
-        .arg("render")
-        .arg(&scene)
-        .arg("-o")
-        .arg(&out_png)
-        .output()
-        .unwrap();
+    let out = common::cli::caustic(&["render", scene.to_str().unwrap(), "-o", out_png.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = common::cli::stderr(&out);
     assert!(stderr.contains("s.toml:7:") && stderr.contains("gone.png"), "{stderr}");
     assert!(!out_png.exists());
 }

@@ -243,12 +243,18 @@ impl Material {
     /// integrator read at a shading point).
     #[inline]
     pub fn at(&self, uv: Vec2) -> Cow<'_, Material> {
-        let Some(t) = self.textures.as_deref().filter(|t| t.has_values()) else {
-            return Cow::Borrowed(self);
-        };
+        match self.textures.as_deref() {
+            Some(t) if t.has_values() => Cow::Owned(self.looked_up(t, uv)),
+            _ => Cow::Borrowed(self),
+        }
+    }
+
+    /// The values of the textured parameters at `uv`, the rest copied.
+    #[inline(never)]
+    fn looked_up(&self, t: &MaterialTextures, uv: Vec2) -> Material {
         let colour = |tex: &Option<Texture>, value: Vec3A| tex.as_ref().map_or(value, |t| t.eval(uv));
         let scalar = |tex: &Option<Texture>, value: f32| tex.as_ref().map_or(value, |t| t.eval_scalar(uv));
-        Cow::Owned(Material {
+        Material {
             name: String::new(),
             model: self.model,
             ambient: colour(&t.ambient, self.ambient),
@@ -270,7 +276,7 @@ impl Material {
             }),
             coating: self.coating,
             textures: None,
-        })
+        }
     }
 
     /// True when rays continue through this surface (mirror or dielectric):

@@ -4,5 +4,6 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod images;
 pub mod metrics;
 pub mod scenes;

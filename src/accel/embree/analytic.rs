@@ -42,13 +42,17 @@ pub(super) struct AnalyticGeometry {
 }
 
 impl AnalyticGeometry {
-    /// `(t, u, v)` of the nearest hit on the surface (holes skipped).
+    /// `(t, u, v)` of the nearest hit on the surface; with `MASKED`, holes
+    /// are skipped (the callbacks of unmasked shapes are the `false`
+    /// instantiation, which never reads `cutouts`).
     #[inline]
-    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+    fn intersect<const MASKED: bool>(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
         match (&self.cutouts, &self.shape) {
-            (None, shape) => shape.intersect(ray, t_max),
-            (Some(c), AnalyticShape::Sphere(s)) => c.sphere(self.object, s, ray, t_max).map(|t| (t, 0.0, 0.0)),
-            (Some(c), AnalyticShape::Quad(q)) => c.quad(self.object, q, ray, t_max),
+            (Some(c), AnalyticShape::Sphere(s)) if MASKED => {
+                c.sphere(self.object, s, ray, t_max).map(|t| (t, 0.0, 0.0))
+            }
+            (Some(c), AnalyticShape::Quad(q)) if MASKED => c.quad(self.object, q, ray, t_max),
+            _ => self.shape.intersect(ray, t_max),
         }
     }
 }
@@ -96,7 +100,9 @@ unsafe fn read_ray_n(base: *const f32, n: usize, i: usize) -> (Ray, f32, f32) {
 }
 
 /// `RTCIntersectFunctionN` of the analytic shapes.
-pub(super) unsafe extern "C" fn analytic_intersect(args: *const sys::RTCIntersectFunctionNArguments) {
+pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
+    args: *const sys::RTCIntersectFunctionNArguments,
+) {
     // SAFETY: Embree passes valid arguments: `valid` has `N` entries,
     // `rayhit` is an RTCRayHitN with `N` lanes (ray: floats 0..12N, hit:
     // from float 12N), and `geometryUserPtr` is our live `AnalyticGeometry`.
@@ -110,7 +116,7 @@ pub(super) unsafe extern "C" fn analytic_intersect(args: *const sys::RTCIntersec
                 continue;
             }
             let (ray, tnear, tfar) = read_ray_n(base, n, i);
-            let Some((t, u, v)) = shape.intersect(&ray, tfar) else {
+            let Some((t, u, v)) = shape.intersect::<MASKED>(&ray, tfar) else {
                 continue;
             };
             if t < tnear {
@@ -134,7 +140,7 @@ pub(super) unsafe extern "C" fn analytic_intersect(args: *const sys::RTCIntersec
 }
 
 /// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit.
-pub(super) unsafe extern "C" fn analytic_occluded(args: *const sys::RTCOccludedFunctionNArguments) {
+pub(super) unsafe extern "C" fn analytic_occluded<const MASKED: bool>(args: *const sys::RTCOccludedFunctionNArguments) {
     // SAFETY: as in `analytic_intersect`, with `ray` an RTCRayN of `N` lanes.
     unsafe {
         let args = &*args;
@@ -146,7 +152,7 @@ pub(super) unsafe extern "C" fn analytic_occluded(args: *const sys::RTCOccludedF
                 continue;
             }
             let (ray, tnear, tfar) = read_ray_n(base, n, i);
-            if let Some((t, _, _)) = shape.intersect(&ray, tfar) {
+            if let Some((t, _, _)) = shape.intersect::<MASKED>(&ray, tfar) {
                 if t >= tnear {
                     *base.add(8 * n + i) = f32::NEG_INFINITY;
                 }

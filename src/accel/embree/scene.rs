@@ -206,6 +206,7 @@ impl Geometry {
     /// scene's own analytic code.
     pub(super) fn analytic(device: &Device, shape: AnalyticGeometry) -> Result<Self, AccelError> {
         let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_USER)?;
+        let masked = shape.cutouts.is_some();
         let shape = Arc::new(shape);
         let user_ptr = Arc::as_ptr(&shape) as *mut c_void;
         // SAFETY: live geometry; `user_ptr` stays valid because the Arc is
@@ -215,8 +216,13 @@ impl Geometry {
             sys::rtcSetGeometryUserPrimitiveCount(geometry.raw, 1);
             sys::rtcSetGeometryUserData(geometry.raw, user_ptr);
             sys::rtcSetGeometryBoundsFunction(geometry.raw, Some(analytic_bounds), std::ptr::null_mut());
-            sys::rtcSetGeometryIntersectFunction(geometry.raw, Some(analytic_intersect));
-            sys::rtcSetGeometryOccludedFunction(geometry.raw, Some(analytic_occluded));
+            if masked {
+                sys::rtcSetGeometryIntersectFunction(geometry.raw, Some(analytic_intersect::<true>));
+                sys::rtcSetGeometryOccludedFunction(geometry.raw, Some(analytic_occluded::<true>));
+            } else {
+                sys::rtcSetGeometryIntersectFunction(geometry.raw, Some(analytic_intersect::<false>));
+                sys::rtcSetGeometryOccludedFunction(geometry.raw, Some(analytic_occluded::<false>));
+            }
         }
         geometry.keep.push(KeepAlive::Shape(shape));
         geometry.commit("user geometry")?;
