@@ -15,8 +15,8 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Vertex indices of each triangle, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
-    /// Texture coordinates, one per position, or none (`v = 0` at the
-    /// image's top row: see `crate::texture`).
+    /// Texture coordinates, one per position, or none (`v = 0` at an
+    /// image's top row, as in glTF and Mitsuba).
     pub uvs: Vec<Vec2>,
     /// Unit tangents along increasing `u` with the bitangent's sign in `w`
     /// (glTF's `TANGENT`), one per position, or none.
