@@ -14,7 +14,7 @@ use std::process::Output;
 fn project(cam: &Camera, p: Vec3A, width: u32, height: u32) -> (u32, u32) {
     let d = p - cam.position;
     let z = d.dot(cam.forward);
-    let tan_half = (cam.vfov_deg.to_radians() * 0.5).tan();
+    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let aspect = width as f32 / height as f32;
     let sx = d.dot(cam.right) / z / (tan_half * aspect);
     let sy = d.dot(cam.up) / z / tan_half;

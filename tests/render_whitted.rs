@@ -59,7 +59,7 @@ fn render_scene(scene: &Scene) -> RenderOutput {
 fn project(scene: &Scene, p: Vec3A) -> (f32, f32) {
     let c = &scene.camera;
     let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
-    let tan_half = (c.vfov_deg.to_radians() * 0.5).tan();
+    let tan_half = (c.fov_deg.to_radians() * 0.5).tan();
     let d = p - c.position;
     let z = d.dot(c.forward);
     let sx = d.dot(c.right) / z / (tan_half * w / h);

@@ -121,7 +121,7 @@ fn every_documented_key_is_parsed() {
     assert!(close(s.camera.position, Vec3A::new(1.0, 2.0, 3.0)));
     assert!(close(s.camera.forward, -Vec3A::Z));
     assert!(close(s.camera.up, Vec3A::Y));
-    assert_eq!(s.camera.vfov_deg, 30.5);
+    assert_eq!(s.camera.fov_deg, 30.5);
 
     // Materials are indexed in name order.
     let names: Vec<_> = s.materials.iter().map(|m| m.name.as_str()).collect();
@@ -232,7 +232,7 @@ v = [0, 0, 1]
     assert_eq!(r.ambient, Vec3A::ZERO);
     assert_eq!(r.triangle_test, TriangleTest::Watertight);
     assert_eq!(r.sharing, SampleSharing::Spread);
-    assert_eq!(s.camera.vfov_deg, 45.0);
+    assert_eq!(s.camera.fov_deg, 45.0);
     assert!(close(s.camera.up, Vec3A::Y));
     let m = &s.materials[0];
     assert_eq!(m.model, ShadingModel::BlinnPhong);

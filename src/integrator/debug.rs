@@ -28,7 +28,7 @@ impl<'c> Projector<'c> {
             camera,
             width: width as f32,
             height: height as f32,
-            tan_half: (camera.vfov_deg.to_radians() * 0.5).tan(),
+            tan_half: camera.tan_half_vertical(width as f32 / height as f32),
             aspect: width as f32 / height as f32,
         }
     }

@@ -775,9 +775,13 @@ impl PixelSamples<'_> {
             // Sobol points are stratified over the pixel's samples.
             SamplerKind::Sobol => rng.vec2(),
         };
-        let ray = r
-            .camera
-            .ray(self.x as f32 + sub.x, self.y as f32 + sub.y, r.width, r.height);
+        let (x, y) = (self.x as f32 + sub.x, self.y as f32 + sub.y);
+        // A thin lens draws its two dimensions next; a pinhole none.
+        let ray = if r.camera.has_lens() {
+            r.camera.ray_through_lens(x, y, r.width, r.height, rng.vec2())
+        } else {
+            r.camera.ray(x, y, r.width, r.height)
+        };
         (ray, rng)
     }
 }

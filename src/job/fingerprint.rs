@@ -97,7 +97,22 @@ fn fingerprint_of(
     if p.progressive {
         field("progressive photons", format!("alpha {:?}", p.alpha).as_bytes());
     }
-    field("camera", format!("{:?}", scene.camera).as_bytes());
+    field(
+        "camera",
+        format!("{:?}", encoding::Camera::of(&scene.camera)).as_bytes(),
+    );
+    let c = &scene.camera;
+    // The camera's later keys, only when they change the rays (a pinhole
+    // with a vertical field of view keeps its fingerprint).
+    if c.fov_axis != crate::scene::FovAxis::Y || c.has_lens() || c.near_clip > 0.0 {
+        let lens = if c.has_lens() {
+            format!(" aperture {:?} focus {:?}", c.aperture_radius, c.focus_distance)
+        } else {
+            String::new()
+        };
+        let text = format!("fov axis {}{lens} near {:?}", c.fov_axis.name(), c.near_clip);
+        field("camera lens", text.as_bytes());
+    }
     let materials: Vec<encoding::Material> = scene.materials.iter().map(encoding::Material::of).collect();
     field("materials", format!("{materials:?}").as_bytes());
     // Textures by content, only for the materials that have them (the
@@ -171,6 +186,27 @@ mod encoding {
         dielectric: Option<Dielectric>,
         conductor: Option<Conductor>,
         coating: Option<Coating>,
+    }
+
+    #[derive(Debug)]
+    pub(super) struct Camera {
+        position: Vec3A,
+        forward: Vec3A,
+        right: Vec3A,
+        up: Vec3A,
+        vfov_deg: f32,
+    }
+
+    impl Camera {
+        pub(super) fn of(c: &scene::Camera) -> Self {
+            Self {
+                position: c.position,
+                forward: c.forward,
+                right: c.right,
+                up: c.up,
+                vfov_deg: c.fov_deg,
+            }
+        }
     }
 
     #[derive(Debug)]
@@ -385,6 +421,23 @@ mod tests {
         assert_ne!(base, progressive);
         s.settings.photons.alpha = 0.6;
         assert_ne!(progressive, fingerprint(&s, AccelKind::KdTree, ""));
+        // The camera's axis, lens and near plane.
+        let mut s = scene();
+        s.camera.fov_axis = crate::scene::FovAxis::X;
+        assert_ne!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        let mut s = scene();
+        s.camera.aperture_radius = 0.1;
+        let lens = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, lens);
+        s.camera.focus_distance += 1.0;
+        assert_ne!(lens, fingerprint(&s, AccelKind::KdTree, ""));
+        let mut s = scene();
+        s.camera.near_clip = 0.5;
+        assert_ne!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        // A pinhole's focus distance changes no ray.
+        let mut s = scene();
+        s.camera.focus_distance += 1.0;
+        assert_eq!(base, fingerprint(&s, AccelKind::KdTree, ""));
         // Textures change it by content, not by path.
         let mut s = scene();
         let image = |v: u8, name: &str| {

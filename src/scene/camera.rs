@@ -1,11 +1,55 @@
-//! Pinhole camera.
+//! The camera: a pinhole or a thin lens (depth of field), with a field of
+//! view along a chosen image axis and a near clipping distance.
 
-use crate::math::{Ray, Vec3A};
+use crate::math::sampling::concentric_disk;
+use crate::math::{Ray, Vec2, Vec3A};
 
-/// A pinhole camera looking from `position` towards `look_at`.
+/// Which image extent a field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum FovAxis {
+    /// The width.
+    X,
+    /// The height.
+    #[default]
+    Y,
+    /// The diagonal.
+    Diagonal,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+impl FovAxis {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            FovAxis::X => "x",
+            FovAxis::Y => "y",
+            FovAxis::Diagonal => "diagonal",
+            FovAxis::Smaller => "smaller",
+            FovAxis::Larger => "larger",
+        }
+    }
+
+    /// The axis named `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [
+            FovAxis::X,
+            FovAxis::Y,
+            FovAxis::Diagonal,
+            FovAxis::Smaller,
+            FovAxis::Larger,
+        ]
+        .into_iter()
+        .find(|a| a.name() == name)
+    }
+}
+
+/// A camera looking from `position` towards `look_at`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
-    /// Eye position.
+    /// Eye position (the lens centre).
     pub position: Vec3A,
     /// Unit viewing direction.
     pub forward: Vec3A,
@@ -13,13 +57,22 @@ pub struct Camera {
     pub right: Vec3A,
     /// Unit up vector (image −y).
     pub up: Vec3A,
-    /// Vertical field of view in degrees.
-    pub vfov_deg: f32,
+    /// Field of view in degrees, across [`fov_axis`](Self::fov_axis).
+    pub fov_deg: f32,
+    /// The image extent the field of view spans.
+    pub fov_axis: FovAxis,
+    /// Lens radius (0: a pinhole, everything sharp).
+    pub aperture_radius: f32,
+    /// Distance along the view axis of the plane in focus (thin lens).
+    pub focus_distance: f32,
+    /// Rays start this far along the view axis (nothing nearer is seen).
+    pub near_clip: f32,
 }
 
 impl Camera {
-    /// Builds a camera; `None` when `look_at == position` or `up` is parallel
-    /// to the viewing direction.
+    /// A pinhole camera with a vertical field of view; `None` when `look_at
+    /// == position`, `up` is parallel to the viewing direction or the field
+    /// of view is not in (0°, 180°).
     pub fn new(position: Vec3A, look_at: Vec3A, up: Vec3A, vfov_deg: f32) -> Option<Self> {
         let forward = (look_at - position).try_normalize()?;
         let right = forward.cross(up).try_normalize()?;
@@ -32,20 +85,86 @@ impl Camera {
             forward,
             right,
             up,
-            vfov_deg,
+            fov_deg: vfov_deg,
+            fov_axis: FovAxis::Y,
+            aperture_radius: 0.0,
+            focus_distance: (look_at - position).length(),
+            near_clip: 0.0,
         })
     }
 
-    /// Ray through film position `(x, y)` in pixels (origin top-left, y down)
-    /// of a `width × height` image.
+    /// `tan(vertical fov / 2)` for an image of aspect ratio `width / height`.
+    #[inline]
+    pub fn tan_half_vertical(&self, aspect: f32) -> f32 {
+        let t = (self.fov_deg.to_radians() * 0.5).tan();
+        let horizontal = match self.fov_axis {
+            FovAxis::Y => return t,
+            FovAxis::X => true,
+            FovAxis::Diagonal => return t / (aspect * aspect + 1.0).sqrt(),
+            FovAxis::Smaller => aspect < 1.0,
+            FovAxis::Larger => aspect >= 1.0,
+        };
+        if horizontal {
+            t / aspect
+        } else {
+            t
+        }
+    }
+
+    /// The vertical field of view in degrees for an image of aspect ratio
+    /// `width / height`.
+    pub fn vertical_fov_deg(&self, aspect: f32) -> f32 {
+        2.0 * self.tan_half_vertical(aspect).atan().to_degrees()
+    }
+
+    /// True when [`ray_through_lens`](Self::ray_through_lens) needs a lens sample.
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.aperture_radius > 0.0
+    }
+
+    /// Pinhole ray through film position `(x, y)` in pixels (origin
+    /// top-left, y down) of a `width × height` image.
     #[inline]
     pub fn ray(&self, x: f32, y: f32, width: u32, height: u32) -> Ray {
-        let tan_half = (self.vfov_deg.to_radians() * 0.5).tan();
+        let dir = self.direction(x, y, width, height);
+        self.clipped(Ray::new(self.position, dir))
+    }
+
+    /// Thin-lens ray (pbrt-v4 §5.2.3, Mitsuba's `thinlens`): from the lens
+    /// point of `u_lens` (a concentric-disk sample) toward the point of the
+    /// focus plane that the pinhole ray through `(x, y)` reaches. A pinhole
+    /// camera ignores `u_lens`.
+    #[inline]
+    pub fn ray_through_lens(&self, x: f32, y: f32, width: u32, height: u32, u_lens: Vec2) -> Ray {
+        if !self.has_lens() {
+            return self.ray(x, y, width, height);
+        }
+        let dir = self.direction(x, y, width, height);
+        let focus = self.position + dir * (self.focus_distance / dir.dot(self.forward));
+        let d = concentric_disk(u_lens) * self.aperture_radius;
+        let origin = self.position + self.right * d.x + self.up * d.y;
+        self.clipped(Ray::new(origin, (focus - origin).normalize()))
+    }
+
+    #[inline]
+    fn direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3A {
         let aspect = width as f32 / height as f32;
+        let tan_half = self.tan_half_vertical(aspect);
         let sx = (2.0 * x / width as f32 - 1.0) * tan_half * aspect;
         let sy = (1.0 - 2.0 * y / height as f32) * tan_half;
-        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
-        Ray::new(self.position, dir)
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+
+    /// `ray` started at the near plane.
+    #[inline]
+    fn clipped(&self, ray: Ray) -> Ray {
+        if self.near_clip > 0.0 {
+            let t = self.near_clip / ray.dir.dot(self.forward);
+            Ray::new(ray.at(t), ray.dir)
+        } else {
+            ray
+        }
     }
 }
 
@@ -64,5 +183,64 @@ mod tests {
         let top = c.ray(50.0, 0.0, 100, 100).dir;
         assert!((top.y - top.z.abs()).abs() < 1e-5);
         assert!(Camera::new(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 60.0).is_none());
+    }
+
+    #[test]
+    fn fov_axes_span_their_extent() {
+        let mut c = Camera::new(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 90.0).unwrap();
+        let (w, h) = (200, 100);
+        // The angle of the ray through film point (x, y) off the view axis, per axis.
+        let slope = |c: &Camera, x: f32, y: f32| {
+            let d = c.ray(x, y, w, h).dir;
+            (d.x / -d.z, d.y / -d.z)
+        };
+        for (axis, edge) in [
+            (FovAxis::X, (200.0, 50.0)),
+            (FovAxis::Larger, (200.0, 50.0)),
+            (FovAxis::Y, (100.0, 0.0)),
+            (FovAxis::Smaller, (100.0, 0.0)),
+        ] {
+            c.fov_axis = axis;
+            let (sx, sy) = slope(&c, edge.0, edge.1);
+            // 90°: the extent's edge is at 45°, a slope of 1.
+            assert!((sx.abs().max(sy.abs()) - 1.0).abs() < 1e-5, "{axis:?}: {sx} {sy}");
+        }
+        c.fov_axis = FovAxis::Diagonal;
+        let (sx, sy) = slope(&c, 200.0, 0.0);
+        assert!(((sx * sx + sy * sy).sqrt() - 1.0).abs() < 1e-5);
+        // Portrait: smaller is the width.
+        c.fov_axis = FovAxis::Smaller;
+        let d = c.ray(100.0, 100.0, 100, 200).dir;
+        assert!((d.x / -d.z - 1.0).abs() < 1e-5);
+        assert!((c.vertical_fov_deg(0.5) - 2.0 * 2.0f32.atan().to_degrees()).abs() < 1e-3);
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_on_the_focus_plane() {
+        let mut c = Camera::new(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 40.0).unwrap();
+        c.aperture_radius = 0.2;
+        c.focus_distance = 5.0;
+        let pin = c.ray(30.0, 70.0, 100, 100);
+        let focus = pin.at(5.0 / pin.dir.dot(c.forward));
+        for u in [Vec2::new(0.1, 0.9), Vec2::new(0.5, 0.5), Vec2::new(0.95, 0.2)] {
+            let r = c.ray_through_lens(30.0, 70.0, 100, 100, u);
+            assert!(r.origin.z == 0.0 && (r.origin.x.hypot(r.origin.y)) <= 0.2 + 1e-6);
+            let p = r.at((focus - r.origin).length());
+            assert!((p - focus).length() < 1e-4, "{p} {focus}");
+        }
+        // A pinhole ignores the lens sample.
+        c.aperture_radius = 0.0;
+        assert_eq!(c.ray_through_lens(30.0, 70.0, 100, 100, Vec2::new(0.9, 0.1)), pin);
+    }
+
+    #[test]
+    fn near_clip_starts_rays_on_the_near_plane() {
+        let mut c = Camera::new(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 60.0).unwrap();
+        c.near_clip = 2.0;
+        for (x, y) in [(50.0, 50.0), (0.0, 0.0), (99.0, 20.0)] {
+            let r = c.ray(x, y, 100, 100);
+            assert!((r.origin.dot(c.forward) - 2.0).abs() < 1e-5, "{}", r.origin);
+            assert!((r.origin.normalize() - r.dir).length() < 1e-5);
+        }
     }
 }

@@ -281,6 +281,16 @@ pub struct CameraDesc {
     pub up: Option<Spanned<Vec3Desc>>,
     /// Vertical field of view in degrees.
     pub vfov: Option<Spanned<f64>>,
+    /// Field of view in degrees across `fov_axis` (instead of `vfov`).
+    pub fov: Option<Spanned<f64>>,
+    /// `"x"`, `"y"`, `"diagonal"`, `"smaller"` or `"larger"`.
+    pub fov_axis: Option<Spanned<String>>,
+    /// Thin-lens radius (0: a pinhole).
+    pub aperture_radius: Option<Spanned<f64>>,
+    /// Distance of the plane in focus along the view axis.
+    pub focus_distance: Option<Spanned<f64>>,
+    /// Nothing nearer than this along the view axis is seen.
+    pub near_clip: Option<Spanned<f64>>,
 }
 
 /// `[materials.NAME]`.

@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 pub use crate::geometry::{Mesh, Quad, Sphere};
 pub use crate::geometry::{WaterSurface, Wave};
-pub use camera::Camera;
+pub use camera::{Camera, FovAxis};
 pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_scene, parse_scene, SceneError};

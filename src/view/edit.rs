@@ -124,8 +124,11 @@ impl EditableScene {
         let cam = &scene.camera;
         let target = vec3_of(doc.get("camera").and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
         let up = vec3_of(doc.get("camera").and_then(|c| c.get("up"))).unwrap_or(Vec3A::Y);
-        let orbit = Orbit::looking_at(cam.position, target, up, cam.vfov_deg)
-            .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, cam.vfov_deg))
+        // The orbit keeps a vertical field of view: the file's, whatever axis it spans.
+        let s = &scene.settings;
+        let vfov = cam.vertical_fov_deg(s.width as f32 / s.height as f32);
+        let orbit = Orbit::looking_at(cam.position, target, up, vfov)
+            .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, vfov))
             .expect("a valid camera has a view direction");
         let light_tables = doc.get("lights").and_then(|l| l.as_array_of_tables());
         let lights = scene
@@ -165,7 +168,14 @@ impl EditableScene {
     /// changing [`Self::orbit`] or [`Self::lights`].
     pub fn apply(&mut self) {
         if let Some(cam) = self.orbit.camera() {
-            self.scene.camera = cam;
+            let old = &self.scene.camera;
+            // The lens and the near plane are the file's; the orbit moves the eye.
+            self.scene.camera = crate::scene::Camera {
+                aperture_radius: old.aperture_radius,
+                focus_distance: old.focus_distance,
+                near_clip: old.near_clip,
+                ..cam
+            };
         }
         for (light, edit) in self.scene.lights.iter_mut().zip(&self.lights) {
             // The loader's product, in the same order, so a saved file
@@ -211,6 +221,9 @@ impl EditableScene {
         set(cam, "look_at", toml_vec3(self.orbit.target));
         set(cam, "up", toml_vec3(self.orbit.up));
         set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
+        // `vfov` now says the field of view: a `fov` on another axis would contradict it.
+        cam.remove("fov");
+        cam.remove("fov_axis");
     }
 
     fn write_edits(&self, doc: &mut DocumentMut) {

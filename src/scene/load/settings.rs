@@ -8,6 +8,7 @@ use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{SamplerKind, Vec3A};
+use crate::scene::camera::FovAxis;
 use crate::scene::desc::{
     AdaptiveGoalName, CameraDesc, CausticsName, DenoiseQualityName, GatherName, IntegratorName, PhotonsDesc,
     RenderDesc, SamplerName, SharingName, Spanned, ToneMapName, TriangleTestName,
@@ -165,18 +166,66 @@ impl Ctx<'_> {
                 format!("{what} is parallel to the viewing direction (`look_at` − `position`): choose another `up`"),
             ));
         }
-        let vfov = match &c.vfov {
+        let (fov_key, fov) = match (&c.vfov, &c.fov) {
+            (Some(_), Some(f)) => {
+                return Err(self.invalid(
+                    f.span(),
+                    "give the field of view once: `vfov` (vertical) or `fov` (with `fov_axis`)",
+                ))
+            }
+            (Some(s), None) => ("vfov", Some(s)),
+            (None, f) => ("fov", f.as_ref()),
+        };
+        let fov_deg = match fov {
             None => DEFAULT_VFOV_DEG,
             Some(s) => {
-                let v = self.number(s, "vfov")?;
+                let v = self.number(s, fov_key)?;
                 if !(v > 0.0 && v < 180.0) {
-                    return Err(self.invalid(s.span(), format!("`vfov` = {v}° must be in (0, 180) degrees")));
+                    return Err(self.invalid(s.span(), format!("`{fov_key}` = {v}° must be in (0, 180) degrees")));
                 }
                 v
             }
         };
-        Camera::new(position, look_at, up, vfov)
-            .ok_or_else(|| self.invalid(c.position.span(), "the camera is degenerate"))
+        let fov_axis = match &c.fov_axis {
+            None => FovAxis::Y,
+            Some(a) if c.fov.is_none() => {
+                return Err(self.invalid(a.span(), "`fov_axis` goes with `fov` (`vfov` is vertical)"))
+            }
+            Some(a) => FovAxis::from_name(a.get_ref()).ok_or_else(|| {
+                self.invalid(
+                    a.span(),
+                    format!(
+                        "unknown `fov_axis` `{}`: expected x, y, diagonal, smaller or larger",
+                        a.get_ref()
+                    ),
+                )
+            })?,
+        };
+        let mut camera = Camera::new(position, look_at, up, fov_deg)
+            .ok_or_else(|| self.invalid(c.position.span(), "the camera is degenerate"))?;
+        camera.fov_axis = fov_axis;
+        let non_negative = |s: &Option<Spanned<f64>>, key: &str| -> Result<Option<f32>, SceneError> {
+            let Some(s) = s else { return Ok(None) };
+            let x = self.number(s, key)?;
+            if x < 0.0 {
+                return Err(self.invalid(s.span(), format!("`{key}` = {x} must be ≥ 0")));
+            }
+            Ok(Some(x))
+        };
+        if let Some(r) = non_negative(&c.aperture_radius, "aperture_radius")? {
+            camera.aperture_radius = r;
+        }
+        if let Some(d) = &c.focus_distance {
+            let x = self.number(d, "focus_distance")?;
+            if x <= 0.0 {
+                return Err(self.invalid(d.span(), format!("`focus_distance` = {x} must be > 0")));
+            }
+            camera.focus_distance = x;
+        }
+        if let Some(n) = non_negative(&c.near_clip, "near_clip")? {
+            camera.near_clip = n;
+        }
+        Ok(camera)
     }
 
     /// `[photons]`.

@@ -1,0 +1,124 @@
+//! The camera's keys: a field of view on any axis, a thin lens (depth of
+//! field) and a near clipping plane, from the scene file to the image.
+
+use caustic::accel::{self, AccelKind, AccelOptions};
+use caustic::film::Film;
+use caustic::integrator::{render, RenderPlan};
+use caustic::scene::{parse_scene, FovAxis, Scene, SceneError};
+use std::path::Path;
+
+fn load(text: &str) -> Result<Scene, SceneError> {
+    parse_scene(text, Path::new("camera.toml"))
+}
+
+/// A checkerboard wall at z = 0 seen from z = 5, a small grey ball at
+/// z = 4.5 in front of the lens; `camera` adds keys to `[camera]`.
+fn scene(camera: &str) -> String {
+    format!(
+        "[render]\nwidth = 64\nheight = 64\nspp = 16\nintegrator = \"path\"\nseed = 2\n\
+         [camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 30\n{camera}\n\
+         [materials.wall]\ndiffuse = {{ type = \"checkerboard\", colour0 = 0.9, colour1 = 0.05, scale = 8.0 }}\n\
+         [materials.grey]\ndiffuse = 0.5\n\
+         [[lights]]\ntype = \"environment\"\ncolour = [1.0, 1.0, 1.0]\n\
+         [[objects]]\ntype = \"quad\"\ncorner = [-2.0, -2.0, 0.0]\nu = [4.0, 0.0, 0.0]\nv = [0.0, 4.0, 0.0]\nmaterial = \"wall\"\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = [0.1, 0.1, 4.0]\nradius = 0.05\nmaterial = \"grey\"\n"
+    )
+}
+
+fn image(text: &str) -> Film {
+    let scene = load(text).unwrap();
+    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film
+}
+
+/// Mean absolute difference between horizontal neighbours: high for a sharp
+/// checkerboard, low for a blurred one.
+fn sharpness(film: &Film) -> f32 {
+    let mut sum = 0.0;
+    for y in 0..film.height {
+        for x in 1..film.width {
+            sum += (film.get(x, y).x - film.get(x - 1, y).x).abs();
+        }
+    }
+    sum / (film.height * (film.width - 1)) as f32
+}
+
+#[test]
+fn camera_keys_are_read_and_checked() {
+    let s = load(
+        &scene("fov = 50\nfov_axis = \"diagonal\"\naperture_radius = 0.3\nfocus_distance = 3.0\nnear_clip = 0.25")
+            .replace("vfov = 30\n", ""),
+    )
+    .unwrap();
+    let c = &s.camera;
+    assert_eq!((c.fov_deg, c.fov_axis), (50.0, FovAxis::Diagonal));
+    assert_eq!((c.aperture_radius, c.focus_distance, c.near_clip), (0.3, 3.0, 0.25));
+    // By default: a pinhole focused on `look_at`, no clipping.
+    let c = load(&scene("")).unwrap().camera;
+    assert_eq!(
+        (c.fov_axis, c.aperture_radius, c.focus_distance, c.near_clip),
+        (FovAxis::Y, 0.0, 5.0, 0.0)
+    );
+    let error = |keys: &str| load(&scene(keys)).unwrap_err().to_string();
+    let e = error("fov = 40");
+    assert!(
+        e.contains("camera.toml:11:7") && e.contains("give the field of view once"),
+        "{e}"
+    );
+    let e = error("fov_axis = \"x\"");
+    assert!(e.contains("`fov_axis` goes with `fov`"), "{e}");
+    let e = load(&scene("fov = 40\nfov_axis = \"width\"").replace("vfov = 30\n", ""))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown `fov_axis` `width`"), "{e}");
+    assert!(error("aperture_radius = -1").contains("`aperture_radius` = -1 must be ≥ 0"));
+    assert!(error("focus_distance = 0").contains("`focus_distance` = 0 must be > 0"));
+    assert!(error("near_clip = -0.5").contains("`near_clip` = -0.5 must be ≥ 0"));
+}
+
+#[test]
+fn a_horizontal_field_of_view_matches_its_vertical_equivalent() {
+    // 64 × 64: x and y spans are the same, so `fov_axis = "x"` renders the same image.
+    let vertical = image(&scene(""));
+    let horizontal = image(&scene("fov = 30\nfov_axis = \"x\"").replace("vfov = 30\n", ""));
+    assert!(vertical.pixels == horizontal.pixels, "the images differ");
+}
+
+#[test]
+fn the_thin_lens_blurs_what_is_out_of_focus() {
+    let pinhole = image(&scene(""));
+    // Focused on the wall: as sharp as the pinhole (within noise).
+    let focused = image(&scene("aperture_radius = 0.3\nfocus_distance = 5.0"));
+    // Focused 2 units in front of the wall: blurred.
+    let blurred = image(&scene("aperture_radius = 0.3\nfocus_distance = 3.0"));
+    let (p, f, b) = (sharpness(&pinhole), sharpness(&focused), sharpness(&blurred));
+    assert!(f > 0.85 * p, "focused {f} against pinhole {p}");
+    assert!(b < 0.6 * p, "blurred {b} against pinhole {p}");
+    // The mean is the same: defocus moves light, it does not lose it.
+    let mean = |f: &Film| f.pixels.iter().map(|c| c.x).sum::<f32>() / f.pixels.len() as f32;
+    assert!((mean(&blurred) / mean(&pinhole) - 1.0).abs() < 0.03);
+    // A zero aperture is the pinhole, bit for bit.
+    assert!(image(&scene("aperture_radius = 0.0\nfocus_distance = 3.0")).pixels == pinhole.pixels);
+}
+
+#[test]
+fn the_near_clip_hides_what_is_closer() {
+    // The ball sits 1 unit in front of the eye.
+    let seen = image(&scene(""));
+    let clipped = image(&scene("near_clip = 1.5"));
+    let wall_only = image(&scene("near_clip = 1.5").replace("radius = 0.05", "radius = 0.0001"));
+    let ball = (0..64 * 64).find(|&i| {
+        let (x, y) = (i % 64, i / 64);
+        (seen.get(x, y) - wall_only.get(x, y)).length() > 0.1
+    });
+    assert!(ball.is_some(), "the ball is visible without clipping");
+    // Clipped, the camera sees the wall through it (the ball still casts a
+    // faint shadow and reflects a little light: a tolerance, not equality).
+    let worst = clipped
+        .pixels
+        .iter()
+        .zip(&wall_only.pixels)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 0.05, "largest difference {worst}");
+}
