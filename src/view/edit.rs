@@ -169,10 +169,16 @@ impl EditableScene {
     pub fn apply(&mut self) {
         if let Some(cam) = self.orbit.camera() {
             let old = &self.scene.camera;
-            // The lens and the near plane are the file's; the orbit moves the eye.
+            // The lens (its focus included) and the near plane are the
+            // file's; the orbit moves the eye.
+            let focus_distance = if old.has_lens() {
+                old.focus_distance
+            } else {
+                cam.focus_distance
+            };
             self.scene.camera = crate::scene::Camera {
                 aperture_radius: old.aperture_radius,
-                focus_distance: old.focus_distance,
+                focus_distance,
                 near_clip: old.near_clip,
                 ..cam
             };
