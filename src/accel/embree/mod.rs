@@ -13,21 +13,16 @@
 //! [`Quad::intersect`](crate::scene::Quad::intersect): Embree then reports exactly
 //! the `(t, a, b)` of the other backends, bit for bit, so cross-checks need no
 //! tolerance for them and the robust-offset reasoning of the integrator (built
-//! around those functions' error bounds) holds unchanged. Measured against
-//! the native types (1M rays, one thread, 200 shapes, this 2-core machine
-//! under load): spheres 4.1 Mrays/s as user geometry vs 1.8–2.5 with
-//! `RTC_GEOMETRY_TYPE_SPHERE_POINT`, whose `t = proj − √(r² − l²)` also
-//! differed from the analytic root by up to 6.2e-4 relative (56% of hits
-//! beyond 1e-5: the cancellation our `c / q` form avoids for rays starting
-//! near a sphere); quads 2.35 Mrays/s vs 1.28 with `RTC_GEOMETRY_TYPE_QUAD`
-//! (two triangles with their own rounding). Scenes hold a handful of
-//! analytic shapes, so exactness wins and costs nothing.
+//! around those functions' error bounds) holds unchanged. Embree's native
+//! spheres and quads were both slower here and less exact (their roots
+//! carry more rounding: the figures are in `docs/benchmarks-history.md`);
+//! scenes hold a handful of analytic shapes, so exactness wins and costs
+//! nothing. An analytic shape whose material has an alpha mask gets the
+//! masked callbacks, which skip its holes through `scene::Cutouts`.
 //!
 //! In robust mode (the default) Embree's `(u, v)` can be off the point at
-//! its own `t` on rays through a vertex or along a sliver's edge (the
-//! crosscheck finds about one such hit in 10⁵ rays aimed at mesh features,
-//! 2e-4 to 7e-4 from the ray's point where the tolerance is 3e-5–1.6e-4),
-//! and the integrator builds the shading point and its error bound from
+//! its own `t` on rays through a vertex or along a sliver's edge (rare: see
+//! `docs/benchmarks-history.md`), and the integrator builds the shading point and its error bound from
 //! `(u, v)`. Each mesh hit is therefore re-intersected with the in-house
 //! watertight test on the triangle Embree found, whose `(t, u, v)` are
 //! consistent by construction. When that test misses Embree's triangle (a
