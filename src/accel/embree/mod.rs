@@ -22,8 +22,8 @@
 //!
 //! In robust mode (the default) Embree's `(u, v)` can be off the point at
 //! its own `t` on rays through a vertex or along a sliver's edge (rare: see
-//! `docs/benchmarks-history.md`), and the integrator builds the shading point and its error bound from
-//! `(u, v)`. Each mesh hit is therefore re-intersected with the in-house
+//! `docs/benchmarks-history.md`), and the integrator builds the shading
+//! point and its error bound from `(u, v)`. Each mesh hit is therefore re-intersected with the in-house
 //! watertight test on the triangle Embree found, whose `(t, u, v)` are
 //! consistent by construction. When that test misses Embree's triangle (a
 //! ray within rounding of an edge that it gives to the neighbour), `(u, v)`
