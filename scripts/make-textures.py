@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Writes the textures and the card mesh of scenes/textured.toml (Python's
-standard library only): a brick albedo and its tangent-space normal map, a
-leaf with an alpha mask, and a unit square with texture coordinates.
+"""Writes the textures and the card mesh of scenes/textured.toml and the sky
+of scenes/environment.toml (Python's standard library only): a brick albedo
+and its tangent-space normal map, a leaf with an alpha mask, a unit square
+with texture coordinates, and a latitude-longitude HDR sky with a sun.
 
 Normal-map convention (caustic's, Mitsuba's and glTF's): red along +u,
 green toward the image's top, blue out of the surface; 8-bit values encode
@@ -103,6 +104,45 @@ def leaf(size=128):
     write_png(os.path.join(OUT, "leaf.png"), size, size, rows, 4)
 
 
+def write_hdr(path, width, height, pixel):
+    """A Radiance RGBE file (flat scanlines), top row first; pixel(x, y) -> (r, g, b)."""
+    out = bytearray(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n")
+    out += f"-Y {height} +X {width}\n".encode()
+    for y in range(height):
+        for x in range(width):
+            rgb = pixel(x, y)
+            m = max(rgb)
+            if m < 1e-32:
+                out += bytes(4)
+                continue
+            mantissa, exponent = math.frexp(m)
+            scale = mantissa * 256.0 / m
+            out += bytes([int(c * scale) for c in rgb] + [exponent + 128])
+    with open(path, "wb") as f:
+        f.write(out)
+
+
+def sky(width=256, height=128):
+    """Blue sky brighter toward the horizon, a sun 30° above it (2° wide, a
+    few thousand times the sky), and a grey-brown ground."""
+    sun_theta, sun_phi = math.radians(60.0), math.radians(40.0)
+    sun = (math.sin(sun_theta) * math.sin(sun_phi), math.cos(sun_theta), -math.sin(sun_theta) * math.cos(sun_phi))
+    cos_sun = math.cos(math.radians(1.0))
+
+    def pixel(x, y):
+        theta = math.pi * (y + 0.5) / height
+        phi = 2.0 * math.pi * (x + 0.5) / width
+        d = (math.sin(theta) * math.sin(phi), math.cos(theta), -math.sin(theta) * math.cos(phi))
+        if sum(a * b for a, b in zip(d, sun)) > cos_sun:
+            return (4000.0, 3600.0, 3000.0)
+        if d[1] < 0.0:
+            return (0.12, 0.1, 0.08)
+        t = d[1] ** 0.5
+        return (0.9 - 0.6 * t, 1.0 - 0.5 * t, 1.2 - 0.1 * t)
+
+    write_hdr(os.path.join(OUT, "sky.hdr"), width, height, pixel)
+
+
 def card():
     # A unit square in the xy plane facing +z, OBJ texture coordinates (v up).
     text = (
@@ -120,3 +160,4 @@ if __name__ == "__main__":
     bricks()
     leaf()
     card()
+    sky()

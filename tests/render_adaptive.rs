@@ -239,6 +239,7 @@ fn adaptive_white_furnace_renders_the_environment() {
     let mut scene = adaptive_scene(0.02);
     scene.lights = vec![Light::Environment {
         radiance: Vec3A::splat(0.5),
+        map: None,
     }];
     for m in &mut scene.materials {
         *m = caustic::scene::Material::diffuse(&m.name, Vec3A::ONE);

@@ -20,6 +20,7 @@ fn furnace(albedo: f32, radiance: f32) -> Scene {
         materials: vec![Material::diffuse("white", Vec3A::splat(albedo))],
         lights: vec![Light::Environment {
             radiance: Vec3A::splat(radiance),
+            map: None,
         }],
         meshes: vec![],
         objects: vec![

@@ -7,8 +7,10 @@
 use crate::geometry::Quad;
 use crate::math::sampling::uniform_sphere;
 use crate::math::{Ray, Vec2, Vec3A};
+use crate::scene::light::EnvironmentMap;
 use crate::scene::{AreaLight, Light, Scene};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// A light as the sampler sees it.
 #[derive(Clone, Debug)]
@@ -16,6 +18,7 @@ enum Emitter {
     Point { position: Vec3A, intensity: Vec3A },
     Area { light: AreaLight, quad: Quad },
     Environment { radiance: Vec3A },
+    EnvironmentMap { scale: Vec3A, map: Arc<EnvironmentMap> },
 }
 
 /// A sampled light direction.
@@ -72,16 +75,19 @@ impl LightSampler {
         };
         let mut emitters = Vec::new();
         let mut power = Vec::new();
-        // Several environments are one: their radiances add up.
+        // Several constant environments are one: their radiances add up.
         let environment = scene.lights.iter().fold(Vec3A::ZERO, |sum, l| match l {
-            Light::Environment { radiance } => sum + *radiance,
+            Light::Environment { radiance, map: None } => sum + *radiance,
             _ => sum,
         });
-        let environment = (environment != Vec3A::ZERO).then_some(Light::Environment { radiance: environment });
+        let environment = (environment != Vec3A::ZERO).then_some(Light::Environment {
+            radiance: environment,
+            map: None,
+        });
         for light in scene
             .lights
             .iter()
-            .filter(|l| !matches!(l, Light::Environment { .. }))
+            .filter(|l| !matches!(l, Light::Environment { map: None, .. }))
             .chain(&environment)
         {
             let (e, p) = match light {
@@ -98,9 +104,19 @@ impl LightSampler {
                     };
                     (Emitter::Area { light: a.clone(), quad }, weight(light.power()))
                 }
-                Light::Environment { radiance } => (
+                Light::Environment { radiance, map: None } => (
                     Emitter::Environment { radiance: *radiance },
                     weight(*radiance) * PI * PI * radius * radius,
+                ),
+                Light::Environment {
+                    radiance,
+                    map: Some(map),
+                } => (
+                    Emitter::EnvironmentMap {
+                        scale: *radiance,
+                        map: map.clone(),
+                    },
+                    weight(*radiance * map.mean()) * PI * PI * radius * radius,
                 ),
             };
             if p > 0.0 && p.is_finite() {
@@ -184,6 +200,16 @@ impl LightSampler {
                 pdf: select / (4.0 * PI),
                 delta: false,
             }),
+            Emitter::EnvironmentMap { scale, map } => {
+                let (wi, pdf) = map.sample(u)?;
+                Some(LightSample {
+                    wi,
+                    target: None,
+                    li: *scale * map.eval(wi),
+                    pdf: select * pdf,
+                    delta: false,
+                })
+            }
         }
     }
 
@@ -226,14 +252,16 @@ impl LightSampler {
         }
     }
 
-    /// Radiance of the environments seen by a ray leaving the scene, and the
-    /// density with which [`sample`](Self::sample) picks that direction.
-    pub fn environment(&self) -> (Vec3A, f32) {
+    /// Radiance of the environments seen by a ray leaving the scene along
+    /// `dir`, and the density with which [`sample`](Self::sample) picks
+    /// that direction.
+    pub fn environment(&self, dir: Vec3A) -> (Vec3A, f32) {
         self.emitters
             .iter()
             .zip(&self.probability)
             .fold((Vec3A::ZERO, 0.0), |(l, pdf), (e, p)| match e {
                 Emitter::Environment { radiance } => (l + *radiance, pdf + p / (4.0 * PI)),
+                Emitter::EnvironmentMap { scale, map } => (l + *scale * map.eval(dir), pdf + p * map.pdf(dir)),
                 _ => (l, pdf),
             })
     }

@@ -260,7 +260,7 @@ impl<'a> PathTracer<'a> {
             }
             let Some(hit) = hit else {
                 // Environments emit no photons: never in the map.
-                let (le, light_pdf) = self.lights.environment();
+                let (le, light_pdf) = self.lights.environment(ray.dir.normalize());
                 if le != Vec3A::ZERO {
                     let w = if specular {
                         1.0

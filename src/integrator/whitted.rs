@@ -44,9 +44,11 @@ use crate::bsdf::specular::{self, reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::sampling::{stratified, stratum_order};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
+use crate::scene::light::EnvironmentMap;
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
 use std::ops::AddAssign;
+use std::sync::Arc;
 
 /// A shadow ray toward a light sample at distance `d` is tested on
 /// `t < d (1 − SHADOW_EPSILON)`: relative, so it is right at every scene
@@ -114,8 +116,10 @@ pub struct Whitted<'a> {
     caustics: Option<(&'a PhotonMap, GatherParams)>,
     /// The fog, when the plan runs it.
     medium: Option<&'a Medium>,
-    /// Radiance of the environment lights, seen by rays that leave the scene.
+    /// Radiance of the constant environment lights, seen by rays that leave the scene.
     environment: Vec3A,
+    /// The environment images and their scales, seen likewise.
+    environment_maps: Vec<(Vec3A, Arc<EnvironmentMap>)>,
 }
 
 impl<'a> Whitted<'a> {
@@ -130,9 +134,17 @@ impl<'a> Whitted<'a> {
             })
             .collect();
         let environment = scene.lights.iter().fold(Vec3A::ZERO, |sum, l| match l {
-            Light::Environment { radiance } => sum + *radiance,
+            Light::Environment { radiance, map: None } => sum + *radiance,
             _ => sum,
         });
+        let environment_maps = scene
+            .lights
+            .iter()
+            .filter_map(|l| match l {
+                Light::Environment { radiance, map: Some(m) } => Some((*radiance, m.clone())),
+                _ => None,
+            })
+            .collect();
         let medium = match plan.fog {
             FogPlan::Run { .. } => scene.settings.medium.as_ref(),
             FogPlan::NoMedium | FogPlan::PathTraced => None,
@@ -143,6 +155,7 @@ impl<'a> Whitted<'a> {
             plan,
             emitters,
             environment,
+            environment_maps,
             caustics: None,
             medium,
         }
@@ -199,7 +212,10 @@ impl<'a> Whitted<'a> {
         let l = match (emitted, hit) {
             (Some(l), _) => l,
             (None, Some(hit)) => self.shade(ray, &hit, depth, ctx),
-            (None, None) => self.environment,
+            (None, None) => self
+                .environment_maps
+                .iter()
+                .fold(self.environment, |l, (scale, map)| l + *scale * map.eval(ray.dir)),
         };
         match self.medium {
             Some(m) => fog::apply(m, ray, t_nearest, l),

@@ -132,7 +132,16 @@ fn fingerprint_of(
             field("material textures", text.as_bytes());
         }
     }
-    field("lights", format!("{:?}", scene.lights).as_bytes());
+    let lights: Vec<encoding::Light> = scene.lights.iter().map(encoding::Light::of).collect();
+    field("lights", format!("{lights:?}").as_bytes());
+    // Environment images by content, only where there are some.
+    for (i, light) in scene.lights.iter().enumerate() {
+        if let crate::scene::Light::Environment { map: Some(m), .. } = light {
+            let hash: String = m.image.hash.iter().map(|b| format!("{b:02x}")).collect();
+            let text = format!("light {i}: image {hash} to world {:?}", m.to_world.to_cols_array());
+            field("environment map", text.as_bytes());
+        }
+    }
     field("objects", format!("{:?}", scene.objects).as_bytes());
     for mesh in &scene.meshes {
         // Geometry only: moving or renaming the mesh file does not matter.
@@ -205,6 +214,43 @@ mod encoding {
                 right: c.right,
                 up: c.up,
                 vfov_deg: c.fov_deg,
+            }
+        }
+    }
+
+    #[derive(Debug)]
+    pub(super) enum Light {
+        Point { position: Vec3A, intensity: Vec3A },
+        Area(AreaLight),
+        Environment { radiance: Vec3A },
+    }
+
+    #[derive(Debug)]
+    pub(super) struct AreaLight {
+        center: Vec3A,
+        u: Vec3A,
+        v: Vec3A,
+        normal: Vec3A,
+        radiance: Vec3A,
+        samples: u32,
+    }
+
+    impl Light {
+        pub(super) fn of(l: &scene::Light) -> Self {
+            match l {
+                scene::Light::Point { position, intensity } => Light::Point {
+                    position: *position,
+                    intensity: *intensity,
+                },
+                scene::Light::Area(a) => Light::Area(AreaLight {
+                    center: a.center,
+                    u: a.u,
+                    v: a.v,
+                    normal: a.normal,
+                    radiance: a.radiance,
+                    samples: a.samples,
+                }),
+                scene::Light::Environment { radiance, .. } => Light::Environment { radiance: *radiance },
             }
         }
     }
@@ -369,6 +415,22 @@ mod tests {
             ..crate::scene::Material::diffuse("g", crate::math::Vec3A::ZERO)
         };
         let text = format!("{:?}", encoding::Material::of(&g));
+        let lights = [
+            crate::scene::Light::Point {
+                position: crate::math::Vec3A::ONE,
+                intensity: crate::math::Vec3A::splat(2.0),
+            },
+            crate::scene::Light::Environment {
+                radiance: crate::math::Vec3A::splat(0.5),
+                map: None,
+            },
+        ];
+        let lights: Vec<encoding::Light> = lights.iter().map(encoding::Light::of).collect();
+        assert_eq!(
+            format!("{lights:?}"),
+            "[Point { position: Vec3A(1.0, 1.0, 1.0), intensity: Vec3A(2.0, 2.0, 2.0) }, \
+             Environment { radiance: Vec3A(0.5, 0.5, 0.5) }]"
+        );
         assert!(
             text.ends_with(
                 "dielectric: Some(Dielectric { ior: 1.5, tint: Vec3A(1.0, 1.0, 1.0), roughness: 0.0, fresnel: None }), \

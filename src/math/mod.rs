@@ -3,6 +3,7 @@
 //! sampler (independent or Sobol) and robust ray offsets.
 
 mod aabb;
+pub mod distribution;
 mod frame;
 mod offset;
 mod ray;

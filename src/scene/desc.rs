@@ -402,6 +402,10 @@ pub struct LightDesc {
     pub v: Option<Spanned<Vec3Desc>>,
     /// Area: shadow rays per shading point.
     pub samples: Option<Spanned<u32>>,
+    /// Environment: a latitude-longitude image (HDR, EXR, PNG, JPEG).
+    pub file: Option<Spanned<String>>,
+    /// Environment: rotation of the image, degrees about x then y then z.
+    pub rotate: Option<Spanned<Vec3Desc>>,
 }
 
 /// `[[objects]]`: the keys of every object type (the loader checks which

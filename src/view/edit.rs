@@ -197,7 +197,7 @@ impl EditableScene {
                     a.radiance = power;
                     a.samples = edit.samples.max(1);
                 }
-                Light::Environment { radiance } => *radiance = power,
+                Light::Environment { radiance, .. } => *radiance = power,
             }
         }
     }

@@ -3,9 +3,12 @@
 
 use super::ctx::Ctx;
 use super::error::SceneError;
-use crate::math::Vec3A;
+use crate::math::{Transform, Vec3, Vec3A};
 use crate::scene::desc::{LightDesc, LightKind};
+use crate::scene::light::EnvironmentMap;
 use crate::scene::{AreaLight, Light};
+use crate::texture::ColourSpace;
+use std::sync::Arc;
 
 /// Largest number of shadow samples of one area light.
 pub const MAX_AREA_LIGHT_SAMPLES: u32 = 4096;
@@ -18,6 +21,8 @@ impl Ctx<'_> {
             ("u", l.u.as_ref().map(|s| s.span())),
             ("v", l.v.as_ref().map(|s| s.span())),
             ("samples", l.samples.as_ref().map(|s| s.span())),
+            ("file", l.file.as_ref().map(|s| s.span())),
+            ("rotate", l.rotate.as_ref().map(|s| s.span())),
         ];
         let colour = match &l.colour {
             None => Vec3A::ONE,
@@ -53,9 +58,31 @@ impl Ctx<'_> {
                     ("v", l.v.as_ref().map(|s| s.span())),
                     ("samples", l.samples.as_ref().map(|s| s.span())),
                     ("position", l.position.as_ref().map(|s| s.span())),
+                    (
+                        "rotate",
+                        l.rotate.as_ref().filter(|_| l.file.is_none()).map(|s| s.span()),
+                    ),
                 ];
-                self.only_keys("an environment light", &present, &["type", "colour", "intensity"])?;
-                Ok(Light::Environment { radiance: power })
+                self.only_keys(
+                    "an environment light (without `file`)",
+                    &present,
+                    &["type", "colour", "intensity", "file"],
+                )?;
+                let map = match &l.file {
+                    None => None,
+                    Some(file) => {
+                        let image = self.image(file, ColourSpace::Srgb)?;
+                        let rotate = self.opt_vec3(&l.rotate, "rotate", Vec3A::ZERO)?;
+                        let to_world = Transform::from_srt(Vec3::ONE, rotate.into(), Vec3::ZERO)
+                            .map(|t| t.to_world.matrix3)
+                            .ok_or_else(|| {
+                                let span = l.rotate.as_ref().map_or(file.span(), |s| s.span());
+                                self.invalid(span, "`rotate` is not a rotation")
+                            })?;
+                        Some(Arc::new(EnvironmentMap::new(image, to_world)))
+                    }
+                };
+                Ok(Light::Environment { radiance: power, map })
             }
             LightKind::Area => {
                 let what = "an area light";

@@ -285,7 +285,7 @@ impl Ctx<'_> {
         Ok(UvTransform::new(scale, rotation, offset))
     }
 
-    fn image(
+    pub(super) fn image(
         &self,
         file: &Spanned<String>,
         space: ColourSpace,
