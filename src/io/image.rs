@@ -41,13 +41,7 @@ pub fn load_image(path: &Path, space: ColourSpace) -> Result<Image, ImageError> 
             "not a PNG, JPEG, Radiance HDR or OpenEXR image (unknown format)".into(),
         ));
     }
-    let mut reader = reader;
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_TEXTURE_SIDE);
-    limits.max_image_height = Some(MAX_TEXTURE_SIDE);
-    limits.max_alloc = Some(MAX_TEXTURE_ALLOC);
-    reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| fail(describe(e)))?;
+    let decoded = limited(reader).decode().map_err(|e| fail(describe(e)))?;
     Ok(from_dynamic(path.display().to_string(), decoded, space))
 }
 
@@ -57,19 +51,24 @@ pub fn decode_image(name: &str, bytes: &[u8], space: ColourSpace) -> Result<Imag
         path: PathBuf::from(name),
         message,
     };
-    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| fail(format!("cannot read: {e}")))?;
     if reader.format().is_none() {
         return Err(fail("not a PNG, JPEG, Radiance HDR or OpenEXR image".into()));
     }
+    let decoded = limited(reader).decode().map_err(|e| fail(describe(e)))?;
+    Ok(from_dynamic(name.to_string(), decoded, space))
+}
+
+/// `reader` with the texture limits: a larger image is refused from its header.
+fn limited<R: std::io::BufRead + std::io::Seek>(mut reader: image::ImageReader<R>) -> image::ImageReader<R> {
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     limits.max_alloc = Some(MAX_TEXTURE_ALLOC);
     reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| fail(describe(e)))?;
-    Ok(from_dynamic(name.to_string(), decoded, space))
+    reader
 }
 
 fn describe(e: image::ImageError) -> String {
