@@ -47,7 +47,7 @@ fn toml_syntax_error() {
 #[test]
 fn unknown_key_in_every_table_kind() {
     expect_error(&format!("{CAMERA}[render]\nwidht = 5\n"), 5, 1, "unknown field `widht`");
-    expect_error(&format!("{CAMERA}fov = 40\n"), 4, 1, "unknown field `fov`");
+    expect_error(&format!("{CAMERA}fov_deg = 40\n"), 4, 1, "unknown field `fov_deg`");
     expect_error(
         &format!("{CAMERA}[materials.m]\nbogus = 1\n"),
         5,
