@@ -168,7 +168,7 @@ impl MaterialTextures {
     /// True when some parameter's value depends on the shading point.
     #[inline]
     pub fn has_values(&self) -> bool {
-        self.has_any() && self.values().next().is_some()
+        self.values().next().is_some()
     }
 
     /// The value textures that are set, with their parameter names.
@@ -199,23 +199,12 @@ impl MaterialTextures {
     /// (`SurfaceInteraction::uv`, `dpdu`, `dpdv` are computed only then).
     #[inline]
     pub fn uses_uv(&self) -> bool {
-        self.has_any() && self.all().any(|(_, t)| !t.is_constant()) || self.normal_map.is_some()
+        self.normal_map.is_some() || self.all().any(|(_, t)| !t.is_constant())
     }
 
-    /// True when any texture is set (a cheap test for the hot paths).
-    #[inline]
+    /// True when any texture is set.
     pub fn has_any(&self) -> bool {
-        self.ambient.is_some()
-            || self.diffuse.is_some()
-            || self.specular.is_some()
-            || self.shininess.is_some()
-            || self.mirror_reflectivity.is_some()
-            || self.mirror_tint.is_some()
-            || self.dielectric_tint.is_some()
-            || self.dielectric_roughness.is_some()
-            || self.conductor_roughness.is_some()
-            || self.normal_map.is_some()
-            || self.alpha.is_some()
+        self.all().next().is_some()
     }
 }
 
