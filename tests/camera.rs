@@ -122,3 +122,65 @@ fn the_near_clip_hides_what_is_closer() {
         .fold(0.0f32, f32::max);
     assert!(worst < 0.05, "largest difference {worst}");
 }
+
+#[test]
+fn pixel_filter_keys_are_read_and_checked() {
+    use caustic::film::filter::PixelFilter;
+    let filter = |keys: &str| load(&scene(keys)).unwrap().camera.filter;
+    assert_eq!(filter(""), PixelFilter::Box { radius: 0.5 });
+    assert_eq!(filter("filter = \"tent\""), PixelFilter::Tent { radius: 1.0 });
+    assert_eq!(
+        filter("filter = \"box\"\nfilter_radius = 1.5"),
+        PixelFilter::Box { radius: 1.5 }
+    );
+    assert_eq!(filter("filter = \"gaussian\""), PixelFilter::gaussian(0.5));
+    assert_eq!(filter("filter = \"gaussian\"\nfilter_stddev = 0.7").radius(), 2.8);
+    let error = |keys: &str| load(&scene(keys)).unwrap_err().to_string();
+    let e = error("filter = \"mitchell\"");
+    assert!(
+        e.contains("camera.toml:11:10") && e.contains("unknown `filter` `mitchell`"),
+        "{e}"
+    );
+    let e = error("filter = \"gaussian\"\nfilter_radius = 2");
+    assert!(
+        e.contains("camera.toml:12:17") && e.contains("4 × `filter_stddev`"),
+        "{e}"
+    );
+    assert!(error("filter_stddev = 0.5").contains("applies to `filter = \"gaussian\"` only"));
+    assert!(error("filter = \"tent\"\nfilter_radius = 0").contains("`filter_radius` = 0 must be in (0, 64]"));
+    assert!(error("filter = \"gaussian\"\nfilter_stddev = 100").contains("must be in (0, 16]"));
+}
+
+#[test]
+fn wider_filters_blur_and_keep_the_mean() {
+    let sharp = image(&scene(""));
+    let mean = |f: &Film| f.pixels.iter().map(|c| c.x as f64).sum::<f64>() / f.pixels.len() as f64;
+    let mut previous = sharpness(&sharp);
+    // Each wider than the last: the checkerboard's edges soften.
+    for keys in [
+        "filter = \"tent\"",
+        "filter = \"gaussian\"\nfilter_stddev = 0.8",
+        "filter = \"box\"\nfilter_radius = 2.5",
+    ] {
+        let film = image(&scene(keys));
+        let s = sharpness(&film);
+        assert!(
+            s < 0.95 * previous,
+            "{keys}: sharpness {s}, the narrower filter's {previous}"
+        );
+        previous = s;
+        // The board is 50 % bright squares far from the border: filtering
+        // moves light between pixels without losing it.
+        assert!((mean(&film) / mean(&sharp) - 1.0).abs() < 0.02, "{keys}");
+    }
+}
+
+#[test]
+fn a_filtered_render_is_the_same_on_any_thread_count() {
+    let text = scene("filter = \"gaussian\"\nfilter_stddev = 0.8");
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| image(&text))
+    };
+    assert!(on(1).pixels == on(2).pixels, "1 and 2 threads differ");
+}

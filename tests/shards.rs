@@ -688,3 +688,57 @@ fn a_photon_file_gives_the_same_image_and_is_refused_for_another_render() {
         .to_string()
         .contains("no photon pass"));
 }
+
+#[test]
+fn a_gaussian_filtered_render_merges_and_resumes_bit_for_bit() {
+    // The filter moves samples out of their pixel's square but never into
+    // another pixel's accumulation: tiles still merge exactly.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene_path()).unwrap();
+    let filtered = dir.path().join("filtered.toml");
+    std::fs::write(
+        &filtered,
+        text.replacen(
+            "vfov = 40\n",
+            "vfov = 40\nfilter = \"gaussian\"\nfilter_stddev = 0.8\n",
+            1,
+        ),
+    )
+    .unwrap();
+    let mut base = request(4, 3);
+    base.scene = filtered;
+    let reference = single(&base, 2, &dir.path().join("single.png"));
+    let unfiltered = single(&request(4, 3), 2, &dir.path().join("box.png"));
+    assert!(reference != unfiltered, "the filter changed no sample");
+    let parts: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            let p = dir.path().join(format!("g{i}.exr"));
+            shard(&base, i, 3, ShardMode::Tiles, 1 + i as usize % 2, &p);
+            p
+        })
+        .collect();
+    let merged = merge(&parts, Some(&dir.path().join("merged.png")), None).unwrap();
+    assert!(merged.accumulation == reference, "merged tiles differ");
+    // Interrupted part way and resumed from the checkpoint.
+    let mut r = base.clone();
+    let checkpoint = dir.path().join("resume.exr");
+    r.checkpoint = Some(checkpoint.clone());
+    let cancel = AtomicBool::new(false);
+    let progress = |done: u64, _: u64| {
+        if done > 2000 {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    };
+    let hooks = JobHooks {
+        cancel: Some(&cancel),
+        progress: &progress,
+        ..JobHooks::silent()
+    };
+    let first = RenderJob::prepare(&r).unwrap().run(&hooks).unwrap();
+    assert!(!first.complete(), "the render was not interrupted");
+    let mut resume = RenderRequest::new(base.scene.clone());
+    resume.resume = Some(checkpoint);
+    let resumed = run(&resume, 1);
+    assert!(resumed.complete());
+    assert!(resumed.output.accumulation == reference, "resumed render differs");
+}

@@ -6,6 +6,7 @@
 pub mod accum;
 pub mod checkpoint;
 pub mod denoise;
+pub mod filter;
 pub mod output;
 pub mod shard;
 pub mod tonemap;
@@ -21,7 +22,8 @@ pub use shard::{ShardId, ShardMode, ShardSet};
 pub use tonemap::{aces_fitted, srgb_oetf, tonemap_to_srgb8, OutputSettings, ToneMap};
 
 /// A linear HDR image, row-major from the top-left pixel, one RGB radiance
-/// value per pixel (the box-filtered average of the pixel's samples).
+/// value per pixel (the average of the pixel's samples, placed by the
+/// camera's pixel filter).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     /// Width in pixels.

@@ -775,6 +775,8 @@ impl PixelSamples<'_> {
             // Sobol points are stratified over the pixel's samples.
             SamplerKind::Sobol => rng.vec2(),
         };
+        // The pixel filter places the sample (filter importance sampling).
+        let sub = r.camera.filter.sample(sub);
         let (x, y) = (self.x as f32 + sub.x, self.y as f32 + sub.y);
         // A thin lens draws its two dimensions next; a pinhole none.
         let ray = if r.camera.has_lens() {

@@ -113,6 +113,15 @@ fn fingerprint_of(
         let text = format!("fov axis {}{lens} near {:?}", c.fov_axis.name(), c.near_clip);
         field("camera lens", text.as_bytes());
     }
+    // The pixel filter, only when it moves samples (the one-pixel box keeps
+    // the fingerprint of renders before filters existed).
+    if !c.filter.is_pixel_box() {
+        let text = match &c.filter {
+            crate::film::filter::PixelFilter::Gaussian { stddev, .. } => format!("gaussian stddev {stddev:?}"),
+            f => format!("{} radius {:?}", f.name(), f.radius()),
+        };
+        field("pixel filter", text.as_bytes());
+    }
     let materials: Vec<encoding::Material> = scene.materials.iter().map(encoding::Material::of).collect();
     field("materials", format!("{materials:?}").as_bytes());
     // Textures by content, only for the materials that have them (the
@@ -496,6 +505,22 @@ mod tests {
         let mut s = scene();
         s.camera.near_clip = 0.5;
         assert_ne!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        // The pixel filter: kind and width.
+        use crate::film::filter::PixelFilter;
+        let with_filter = |f: PixelFilter| {
+            let mut s = scene();
+            s.camera.filter = f;
+            fingerprint(&s, AccelKind::KdTree, "")
+        };
+        assert_eq!(base, with_filter(PixelFilter::Box { radius: 0.5 }));
+        let wide_box = with_filter(PixelFilter::Box { radius: 1.0 });
+        let tent = with_filter(PixelFilter::Tent { radius: 1.0 });
+        let gaussian = with_filter(PixelFilter::gaussian(0.5));
+        for f in [&wide_box, &tent, &gaussian] {
+            assert_ne!(&base, f);
+        }
+        assert_ne!(wide_box, tent);
+        assert_ne!(gaussian, with_filter(PixelFilter::gaussian(0.6)));
         // A pinhole's focus distance changes no ray.
         let mut s = scene();
         s.camera.focus_distance += 1.0;

@@ -1,6 +1,7 @@
 //! The camera: a pinhole or a thin lens (depth of field), with a field of
 //! view along a chosen image axis and a near clipping distance.
 
+use crate::film::filter::PixelFilter;
 use crate::math::sampling::concentric_disk;
 use crate::math::{Ray, Vec2, Vec3A};
 
@@ -67,6 +68,9 @@ pub struct Camera {
     pub focus_distance: f32,
     /// Rays start this far along the view axis (nothing nearer is seen).
     pub near_clip: f32,
+    /// Pixel reconstruction filter: where in and around its pixel each
+    /// camera sample lands.
+    pub filter: PixelFilter,
 }
 
 impl Camera {
@@ -90,6 +94,7 @@ impl Camera {
             aperture_radius: 0.0,
             focus_distance: (look_at - position).length(),
             near_clip: 0.0,
+            filter: PixelFilter::default(),
         })
     }
 

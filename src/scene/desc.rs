@@ -291,6 +291,12 @@ pub struct CameraDesc {
     pub focus_distance: Option<Spanned<f64>>,
     /// Nothing nearer than this along the view axis is seen.
     pub near_clip: Option<Spanned<f64>>,
+    /// Pixel filter: `"box"`, `"tent"` or `"gaussian"`.
+    pub filter: Option<Spanned<String>>,
+    /// Half width of a box or tent filter in pixels.
+    pub filter_radius: Option<Spanned<f64>>,
+    /// Standard deviation of a Gaussian filter in pixels.
+    pub filter_stddev: Option<Spanned<f64>>,
 }
 
 /// `[materials.NAME]`.

@@ -4,6 +4,7 @@
 use super::ctx::Ctx;
 use super::error::SceneError;
 use crate::film::denoise::DenoiseQuality;
+use crate::film::filter::PixelFilter;
 use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
@@ -225,7 +226,67 @@ impl Ctx<'_> {
         if let Some(n) = non_negative(&c.near_clip, "near_clip")? {
             camera.near_clip = n;
         }
+        camera.filter = self.pixel_filter(c)?;
         Ok(camera)
+    }
+
+    /// The camera's `filter`, `filter_radius` and `filter_stddev`.
+    fn pixel_filter(&self, c: &CameraDesc) -> Result<PixelFilter, SceneError> {
+        // Beyond this a filter averages over a large part of any image.
+        const MAX_RADIUS: f32 = 64.0;
+        let name = c.filter.as_ref().map_or("box", |f| f.get_ref().as_str());
+        let positive = |s: &Spanned<f64>, key: &str, max: f32| -> Result<f32, SceneError> {
+            let x = self.number(s, key)?;
+            if !(x > 0.0 && x <= max) {
+                return Err(self.invalid(s.span(), format!("`{key}` = {x} must be in (0, {max}] pixels")));
+            }
+            Ok(x)
+        };
+        let radius = |default: f32| -> Result<f32, SceneError> {
+            c.filter_radius
+                .as_ref()
+                .map_or(Ok(default), |r| positive(r, "filter_radius", MAX_RADIUS))
+        };
+        let misplaced = |s: &Option<Spanned<f64>>, key: &str, why: &str| match s {
+            Some(s) => Err(self.invalid(s.span(), format!("`{key}` {why}"))),
+            None => Ok(()),
+        };
+        match name {
+            "box" | "tent" => {
+                misplaced(
+                    &c.filter_stddev,
+                    "filter_stddev",
+                    "applies to `filter = \"gaussian\"` only",
+                )?;
+                Ok(if name == "box" {
+                    PixelFilter::Box {
+                        radius: radius(PixelFilter::DEFAULT_BOX_RADIUS)?,
+                    }
+                } else {
+                    PixelFilter::Tent {
+                        radius: radius(PixelFilter::DEFAULT_TENT_RADIUS)?,
+                    }
+                })
+            }
+            "gaussian" => {
+                misplaced(
+                    &c.filter_radius,
+                    "filter_radius",
+                    "does not apply to a Gaussian, whose radius is 4 × `filter_stddev`",
+                )?;
+                let stddev = c.filter_stddev.as_ref().map_or(Ok(PixelFilter::DEFAULT_STDDEV), |s| {
+                    positive(s, "filter_stddev", MAX_RADIUS / 4.0)
+                })?;
+                Ok(PixelFilter::gaussian(stddev))
+            }
+            other => {
+                let span = c.filter.as_ref().map(|f| f.span()).unwrap_or_default();
+                Err(self.invalid(
+                    span,
+                    format!("unknown `filter` `{other}`: expected box, tent or gaussian"),
+                ))
+            }
+        }
     }
 
     /// `[photons]`.
