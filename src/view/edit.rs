@@ -169,8 +169,8 @@ impl EditableScene {
     pub fn apply(&mut self) {
         if let Some(cam) = self.orbit.camera() {
             let old = &self.scene.camera;
-            // The lens (its focus included) and the near plane are the
-            // file's; the orbit moves the eye.
+            // The lens (its focus included), the near plane and the pixel
+            // filter are the file's; the orbit moves the eye.
             let focus_distance = if old.has_lens() {
                 old.focus_distance
             } else {
@@ -180,6 +180,7 @@ impl EditableScene {
                 aperture_radius: old.aperture_radius,
                 focus_distance,
                 near_clip: old.near_clip,
+                filter: old.filter.clone(),
                 ..cam
             };
         }
