@@ -229,6 +229,19 @@ fn info_prints_statistics_build_and_plan() {
 }
 
 #[test]
+fn info_lists_environment_images_and_the_pixel_filter() {
+    let o = caustic(&["info", "scenes/environment.toml", "--accel", "kdtree"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    for needle in [
+        "environment image scenes/textures/sky.hdr: 256×128",
+        "camera      pinhole, pixel filter box (radius 0.5 px)",
+    ] {
+        assert!(s.contains(needle), "missing {needle:?} in:\n{s}");
+    }
+}
+
+#[test]
 fn bad_input_exits_2_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();
     // Missing scene file.

@@ -61,6 +61,24 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         );
     }
     println!("lights      {}", scene.lights.len());
+    for light in &scene.lights {
+        if let scene::Light::Environment { map: Some(m), .. } = light {
+            println!(
+                "            environment image {}: {}×{}, {:.1} MiB",
+                m.image.name,
+                m.image.width,
+                m.image.height,
+                m.image.memory_bytes() as f64 / (1 << 20) as f64
+            );
+        }
+    }
+    let c = &scene.camera;
+    println!(
+        "camera      {}, pixel filter {} (radius {} px)",
+        if c.has_lens() { "thin lens" } else { "pinhole" },
+        c.filter.name(),
+        c.filter.radius()
+    );
     println!(
         "bounds      [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
         b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
