@@ -174,10 +174,10 @@ fn unknown_enum_values() {
         "unknown variant `cube`",
     );
     expect_error(
-        &format!("{CAMERA}[[lights]]\ntype = \"spot\"\nposition = [0, 0, 0]\n"),
+        &format!("{CAMERA}[[lights]]\ntype = \"laser\"\nposition = [0, 0, 0]\n"),
         5,
         8,
-        "unknown variant `spot`",
+        "unknown variant `laser`",
     );
 }
 

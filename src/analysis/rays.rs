@@ -231,8 +231,9 @@ pub fn shadow_rays(scene: &Scene, reference: &dyn Accel, primary: &[(Ray, f32)],
             for light in &scene.lights {
                 let target = match light {
                     Light::Point { position, .. } => *position,
+                    Light::Spot(s) => s.position,
                     Light::Area(a) => a.center + a.u * (rng.f32() - 0.5) + a.v * (rng.f32() - 0.5),
-                    Light::Environment { .. } => continue,
+                    Light::Environment { .. } | Light::Directional { .. } => continue,
                 };
                 let o = offset_ray_origin(si.p, si.p_error, si.ng, target - si.p);
                 let d = target - o;

@@ -82,7 +82,7 @@ impl<'a> AovTracer<'a> {
                     let colour = if peak > 0.0 { a.radiance / peak } else { Vec3A::ZERO };
                     (q, colour)
                 }),
-                Light::Point { .. } | Light::Environment { .. } => None,
+                _ => None,
             })
             .collect();
         Self { scene, accel, emitters }

@@ -73,7 +73,7 @@ fn over_one(c: Vec3A) -> Option<String> {
 
 /// Warnings for every material used by an object of `scene`.
 pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
-    let has_point_light = scene.lights.iter().any(|l| matches!(l, Light::Point { .. }));
+    let has_delta_light = scene.lights.iter().any(Light::is_delta);
     let integrator = scene.settings.integrator;
     let mut used = vec![false; scene.materials.len()];
     for o in &scene.objects {
@@ -85,7 +85,7 @@ pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
         .zip(used)
         .filter(|(_, used)| *used)
         .flat_map(|(m, _)| {
-            warnings_of(m, integrator, has_point_light)
+            warnings_of(m, integrator, has_delta_light)
                 .into_iter()
                 .map(|message| MaterialWarning {
                     material: m.name.clone(),
@@ -95,7 +95,7 @@ pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
         .collect()
 }
 
-fn warnings_of(m: &Material, integrator: IntegratorKind, has_point_light: bool) -> Vec<String> {
+fn warnings_of(m: &Material, integrator: IntegratorKind, has_delta_light: bool) -> Vec<String> {
     let mut out = Vec::new();
     let whitted = integrator == IntegratorKind::Whitted;
     if m.conductor.is_some() || m.dielectric.is_some() {
@@ -125,10 +125,10 @@ fn warnings_of(m: &Material, integrator: IntegratorKind, has_point_light: bool) 
     if let Some(d) = m.dielectric {
         if set(m.specular) && !whitted {
             out.push("`specular` is ignored: the path integrator's dielectric has no highlight lobe".into());
-        } else if set(m.specular) && !has_point_light {
+        } else if set(m.specular) && !has_delta_light {
             out.push(
-                "`specular` is ignored: a dielectric keeps the highlight of point lights only and the scene has \
-                 none (area lights appear in its reflection)"
+                "`specular` is ignored: a dielectric keeps the highlight of point lights only (point, spot, \
+                 directional) and the scene has none (area lights appear in its reflection)"
                     .into(),
             );
         }

@@ -8,10 +8,13 @@
 //! (pbrt-v4 §13.1.1, survival `min(1, max βᵢ)` with the refraction scaling
 //! taken out); `max_depth`, when set, caps the bounces.
 //!
-//! Area lights are one-sided emitting rectangles and, unlike in the Whitted
-//! integrator, opaque black surfaces: a path ends where it meets one, and
-//! they cast shadows (a ceiling light hung just below the ceiling shades
-//! the ceiling above it, as in other physically based renderers). Spawned
+//! `[[lights]]` rectangles are one-sided emitters and, unlike in the
+//! Whitted integrator, opaque black surfaces: a path ends where it meets
+//! one, and they cast shadows (a ceiling light hung just below the ceiling
+//! shades the ceiling above it, as in other physically based renderers).
+//! Objects whose material emits add their emission where a path meets
+//! their front (MIS-weighted against the light sample's density at the
+//! previous vertex) and scatter by their BSDF like any surface. Spawned
 //! rays start at `offset_ray_origin`; shadow rays stop `SHADOW_EPSILON`
 //! short of the light.
 //!
@@ -271,11 +274,23 @@ impl<'a> PathTracer<'a> {
                 }
                 break;
             };
+            let si = self.scene.surface_interaction(&ray, &hit);
+            let material = &*self.scene.materials[si.material as usize].at(si.uv);
+            if let Some(light) = self.lights.object_emitter(si.object) {
+                // An emitting surface, seen from the side its normal faces.
+                let in_map = since_map.is_some_and(|n| n >= 1 && n <= self.caustic_depth);
+                if ray.dir.dot(si.ng) < 0.0 && !in_map {
+                    let w = if specular {
+                        1.0
+                    } else {
+                        power_heuristic(bsdf_pdf, self.lights.pdf_point(light, ray.origin, si.p, si.ng))
+                    };
+                    l += beta * material.emission * w;
+                }
+            }
             if depth >= self.max_depth {
                 break;
             }
-            let si = self.scene.surface_interaction(&ray, &hit);
-            let material = &*self.scene.materials[si.material as usize].at(si.uv);
             let bsdf = Bsdf::for_material(material, FresnelModel::Exact, Transport::Radiance);
             if bsdf.is_black() {
                 break;

@@ -53,10 +53,24 @@ pub enum ShadowSampling {
 /// The plan for one light.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightPlan {
-    /// Index in `Scene::lights`.
+    /// Index in `Scene::lights` (`usize::MAX` for an emitting object).
     pub index: usize,
+    /// The emitting object, for an object whose material emits.
+    pub object: Option<u32>,
+    /// What kind of light it is, in words.
+    pub kind: &'static str,
     /// Shadow sampling.
     pub shadow: ShadowSampling,
+}
+
+impl LightPlan {
+    /// How messages name the light.
+    pub fn label(&self) -> String {
+        match self.object {
+            Some(o) => format!("object {o} (emitting)"),
+            None => format!("light {} ({})", self.index, self.kind),
+        }
+    }
 }
 
 /// Why samples do or do not share secondary work.
@@ -238,31 +252,50 @@ impl RenderPlan {
             Sharing::Spread
         };
         let spread = sharing == Sharing::Spread;
-        let lights = scene
+        let stratified = |n: u32| {
+            let n = n.max(1);
+            // Spreading needs at least one stratum per sample: with fewer
+            // strata than samples the grid is refined to `spp` strata (one
+            // shadow ray per sample).
+            let strata = if spread { n.max(spp) } else { n };
+            let rays_per_sample = if spread { strata.div_ceil(spp) } else { strata };
+            ShadowSampling::Stratified {
+                strata,
+                grid: crate::math::sampling::grid_for(strata),
+                rays_per_sample,
+            }
+        };
+        let mut lights: Vec<LightPlan> = scene
             .lights
             .iter()
             .enumerate()
             .map(|(index, light)| {
-                let shadow = match light {
-                    Light::Point { .. } => ShadowSampling::Hard,
-                    Light::Environment { .. } => ShadowSampling::Environment,
-                    Light::Area(a) => {
-                        let n = a.samples.max(1);
-                        // Spreading needs at least one stratum per sample:
-                        // with fewer strata than samples the grid is refined
-                        // to `spp` strata (one shadow ray per sample).
-                        let strata = if spread { n.max(spp) } else { n };
-                        let rays_per_sample = if spread { strata.div_ceil(spp) } else { strata };
-                        ShadowSampling::Stratified {
-                            strata,
-                            grid: crate::math::sampling::grid_for(strata),
-                            rays_per_sample,
-                        }
-                    }
+                let (kind, shadow) = match light {
+                    Light::Point { .. } => ("point", ShadowSampling::Hard),
+                    Light::Spot(_) => ("spot", ShadowSampling::Hard),
+                    Light::Directional { .. } => ("directional", ShadowSampling::Hard),
+                    Light::Environment { .. } => ("environment", ShadowSampling::Environment),
+                    Light::Area(a) => ("area", stratified(a.samples)),
                 };
-                LightPlan { index, shadow }
+                LightPlan {
+                    index,
+                    object: None,
+                    kind,
+                    shadow,
+                }
             })
             .collect();
+        // Objects whose material emits: area lights of the object's shape.
+        for (i, o) in scene.objects.iter().enumerate() {
+            if scene.materials[o.material as usize].emits() {
+                lights.push(LightPlan {
+                    index: usize::MAX,
+                    object: Some(i as u32),
+                    kind: "area",
+                    shadow: stratified(crate::scene::load::DEFAULT_AREA_LIGHT_SAMPLES),
+                });
+            }
+        }
         let mut specular_objects = 0;
         let mut delta_objects = 0;
         let mut secondary_objects = 0;
@@ -305,7 +338,7 @@ impl RenderPlan {
             PhotonPlan::PathTraced
         } else if casters == 0 {
             PhotonPlan::NoSpecularCaster
-        } else if !scene.lights.iter().any(Light::emits_photons) {
+        } else if !scene.lights.iter().any(Light::emits_photons) && !lights.iter().any(|l| l.object.is_some()) {
             PhotonPlan::NoLights
         } else if max_depth == 0 {
             PhotonPlan::DepthZero
@@ -502,31 +535,25 @@ impl RenderPlan {
         }
         for l in &self.lights {
             if self.integrator == IntegratorKind::Path {
-                let (kind, how) = match l.shadow {
-                    ShadowSampling::Hard => ("point", "sampled by next-event estimation"),
-                    ShadowSampling::Stratified { .. } => {
-                        ("area", "sampled by next-event estimation and hit by paths (MIS)")
+                let how = match l.shadow {
+                    ShadowSampling::Hard => "sampled by next-event estimation",
+                    ShadowSampling::Stratified { .. } => "sampled by next-event estimation and hit by paths (MIS)",
+                    ShadowSampling::Environment => {
+                        "sampled (an image by its luminance) and hit by escaping paths (MIS)"
                     }
-                    ShadowSampling::Environment => ("environment", "sampled uniformly and hit by escaping paths (MIS)"),
                 };
-                stages.push(Stage::ran(format!("light {} ({kind})", l.index), how.into()));
+                stages.push(Stage::ran(l.label(), how.into()));
                 continue;
             }
             stages.push(match l.shadow {
-                ShadowSampling::Environment => Stage::ran(
-                    format!("light {} (environment)", l.index),
-                    "seen by rays that leave the scene".into(),
-                ),
-                ShadowSampling::Hard => Stage::ran(
-                    format!("light {} (point)", l.index),
-                    "hard shadow, 1 shadow ray per shading point".into(),
-                ),
+                ShadowSampling::Environment => Stage::ran(l.label(), "seen by rays that leave the scene".into()),
+                ShadowSampling::Hard => Stage::ran(l.label(), "hard shadow, 1 shadow ray per shading point".into()),
                 ShadowSampling::Stratified {
                     strata,
                     grid,
                     rays_per_sample,
                 } => Stage::ran(
-                    format!("light {} (area)", l.index),
+                    l.label(),
                     if self.spread() {
                         format!(
                             "soft shadow, {strata} stratified jittered shadow rays per pixel ({}x{} strata) \

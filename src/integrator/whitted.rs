@@ -1,6 +1,7 @@
 //! Whitted ray tracing (Whitted 1980) with physically based lights:
 //! ambient + Lambert diffuse + a Phong or Blinn-Phong highlight per light,
-//! hard shadows for point lights, stratified soft shadows for area lights,
+//! hard shadows for point, spot and directional lights, stratified soft
+//! shadows for area lights and emitting objects,
 //! mirror reflection, and Fresnel-weighted reflection/refraction at dielectrics.
 //!
 //! Units. A point light of intensity `I` gives irradiance `E = I cos θ / r²`;
@@ -18,16 +19,21 @@
 //! epsilon); shadow rays stop a relative `SHADOW_EPSILON` short of the light.
 //!
 //! Conventions worth knowing:
-//! - Lights are not scene objects. Camera and specular rays test the area
-//!   lights' rectangles analytically (emitting side only: seen from behind a
-//!   light is transparent); shadow rays only query the accelerator, so no
-//!   light ever occludes another, or itself.
+//! - `[[lights]]` are not scene objects. Camera and specular rays test the
+//!   area lights' rectangles analytically (emitting side only: seen from
+//!   behind a light is transparent); shadow rays only query the
+//!   accelerator, so no such light ever occludes another, or itself.
+//!   Emitting objects are objects: seen, they add their emission to what
+//!   their material reflects, and they cast shadows; their direct light is
+//!   `(1/N) Σ_k f L_k cos θ_k / pdf_k` over N stratified samples of the
+//!   light interface (`scene::light::Emitter`).
 //! - Shadow rays treat every object as opaque, glass included (classic
 //!   Whitted): light focused through glass is the photon pass's job.
 //! - Beyond `max_depth` bounces the reflected / refracted term is black.
 //! - Dielectrics have no diffuse or ambient term; they keep the specular
-//!   highlight of point lights only (a reflected ray never finds a point
-//!   light, while area lights show up in the reflection itself).
+//!   highlight of delta lights only (a reflected ray never finds a point,
+//!   spot or directional light, while area lights show up in the
+//!   reflection itself).
 //! - Caustics: with a photon map, diffuse surfaces add `ρ/π · E_caustic`,
 //!   the cone-filtered irradiance of the caustic photons (`photon::gather`),
 //!   so the shadow behind glass stays dark in direct light but receives the
@@ -44,7 +50,7 @@ use crate::bsdf::specular::{self, reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::sampling::{stratified, stratum_order};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
-use crate::scene::light::EnvironmentMap;
+use crate::scene::light::{bounding_sphere, Emitter, EnvironmentMap};
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
 use std::ops::AddAssign;
@@ -112,6 +118,10 @@ pub struct Whitted<'a> {
     /// Area lights as rectangles, tested analytically by camera and specular
     /// rays (lights are not scene objects, so shadow rays never hit them).
     emitters: Vec<(Quad, Vec3A)>,
+    /// The scene's lights behind the light interface, by index.
+    light_emitters: Vec<Emitter>,
+    /// The emitter of each object whose material emits.
+    object_emitters: Vec<Option<Emitter>>,
     /// The caustic map and how to gather from it (none without photon pass).
     caustics: Option<(&'a PhotonMap, GatherParams)>,
     /// The fog, when the plan runs it.
@@ -130,9 +140,21 @@ impl<'a> Whitted<'a> {
             .iter()
             .filter_map(|l| match l {
                 Light::Area(a) => Quad::new(a.center - (a.u + a.v) * 0.5, a.u, a.v).map(|q| (q, a.radiance)),
-                Light::Point { .. } | Light::Environment { .. } => None,
+                _ => None,
             })
             .collect();
+        let (center, radius) = bounding_sphere(scene);
+        let light_emitters = scene
+            .lights
+            .iter()
+            .map(|l| Emitter::of_light(l, center, radius))
+            .collect();
+        let mut object_emitters = vec![None; scene.objects.len()];
+        for lp in &plan.lights {
+            if let Some(o) = lp.object {
+                object_emitters[o as usize] = Emitter::of_object(scene, o);
+            }
+        }
         let environment = scene.lights.iter().fold(Vec3A::ZERO, |sum, l| match l {
             Light::Environment { radiance, map: None } => sum + *radiance,
             _ => sum,
@@ -154,6 +176,8 @@ impl<'a> Whitted<'a> {
             accel,
             plan,
             emitters,
+            light_emitters,
+            object_emitters,
             environment,
             environment_maps,
             caustics: None,
@@ -227,6 +251,18 @@ impl<'a> Whitted<'a> {
     fn shade(&self, ray: &Ray, hit: &crate::accel::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = self.scene.surface_interaction(ray, hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
+        // An emitting surface seen from the side its normal faces.
+        let emitted = if ray.dir.dot(si.ng) < 0.0 {
+            m.emission
+        } else {
+            Vec3A::ZERO
+        };
+        emitted + self.scatter(ray, &si, m, depth, ctx)
+    }
+
+    /// Radiance the surface at `si` reflects or transmits toward the ray's origin.
+    fn scatter(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        let si = *si;
         if let Some(d) = m.dielectric {
             return self.dielectric(ray, &si, m, d, depth, ctx);
         }
@@ -294,7 +330,32 @@ impl<'a> Whitted<'a> {
             return out;
         }
         for lp in &self.plan.lights {
+            if let Some(object) = lp.object {
+                if let (false, Some(e), ShadowSampling::Stratified { strata, grid, .. }) =
+                    (highlights_only, &self.object_emitters[object as usize], lp.shadow)
+                {
+                    let seed = object.wrapping_add(0x5bd1_e995);
+                    out += self.stratified_emitter(si, (ng, ns), e, strata, grid, seed, &f, ctx);
+                }
+                continue;
+            }
             match (&self.scene.lights[lp.index], lp.shadow) {
+                (Light::Spot(_) | Light::Directional { .. }, _) => {
+                    let Some(ls) = self.light_emitters[lp.index].sample_li(si.p, Vec2::ZERO) else {
+                        continue;
+                    };
+                    let cos = ns.dot(ls.wi);
+                    if ls.wi.dot(ng) <= 0.0 || cos <= 0.0 {
+                        continue;
+                    }
+                    let visible = match ls.target {
+                        Some(q) => self.unoccluded(si, q, ctx),
+                        None => self.unoccluded_toward(si, ls.wi, ctx),
+                    };
+                    if visible {
+                        out += f(ls.wi) * ls.li * cos;
+                    }
+                }
                 (Light::Point { position, intensity }, _) => {
                     let to = *position - si.p;
                     let d2 = to.length_squared();
@@ -365,6 +426,54 @@ impl<'a> Whitted<'a> {
             }
         }
         out
+    }
+
+    /// Direct light from an emitting object by `strata` stratified samples
+    /// of its light interface (spread over the pixel's samples as a
+    /// rectangle's are): `Σ f · Li · cos θ / pdf`, weighted. `ng` and `ns`
+    /// face the viewer.
+    #[allow(clippy::too_many_arguments)]
+    fn stratified_emitter(
+        &self,
+        si: &SurfaceInteraction,
+        (ng, ns): (Vec3A, Vec3A),
+        e: &Emitter,
+        strata: u32,
+        (nx, ny): (u32, u32),
+        seed: u32,
+        f: &dyn Fn(Vec3A) -> Vec3A,
+        ctx: &mut SampleContext,
+    ) -> Vec3A {
+        let (first, step, weight) = if self.plan.spread() {
+            (ctx.slot, self.plan.spp, self.plan.spp as f32 / strata as f32)
+        } else {
+            (0, 1, 1.0 / strata as f32)
+        };
+        let light_seed = ctx.light_seed ^ seed.wrapping_mul(0x9e37_79b9);
+        let mut sum = Vec3A::ZERO;
+        let mut s = first;
+        while s < strata {
+            let (jx, jy) = ctx.rng.f32x2();
+            let cell = stratum_order(s, nx, ny, light_seed);
+            let u = stratified(cell, nx, ny, Vec2::new(jx, jy));
+            s += step;
+            let Some(ls) = e.sample_li(si.p, u) else { continue };
+            let Some(q) = ls.target else { continue };
+            let cos = ns.dot(ls.wi);
+            if ls.wi.dot(ng) <= 0.0 || cos <= 0.0 || !self.unoccluded(si, q, ctx) {
+                continue;
+            }
+            sum += f(ls.wi) * ls.li * (cos / ls.pdf);
+        }
+        sum * weight
+    }
+
+    /// Casts a shadow ray from the (offset) shading point along `dir` and
+    /// reports whether it leaves the scene.
+    fn unoccluded_toward(&self, si: &SurfaceInteraction, dir: Vec3A, ctx: &mut SampleContext) -> bool {
+        let origin = offset_ray_origin(si.p, si.p_error, si.ng, dir);
+        ctx.counts.shadow += 1;
+        !self.accel.occluded(&Ray::new(origin, dir), f32::INFINITY)
     }
 
     /// Casts a shadow ray from the (offset) shading point toward `target`

@@ -124,6 +124,16 @@ fn fingerprint_of(
     }
     let materials: Vec<encoding::Material> = scene.materials.iter().map(encoding::Material::of).collect();
     field("materials", format!("{materials:?}").as_bytes());
+    // Emission, only for the materials that emit (the fingerprint of a
+    // scene without emitting materials is the one before they existed).
+    for (i, m) in scene.materials.iter().enumerate() {
+        if m.emission != crate::math::Vec3A::ZERO {
+            field(
+                "material emission",
+                format!("material {i}: {:?}", m.emission.to_array()).as_bytes(),
+            );
+        }
+    }
     // Textures by content, only for the materials that have them (the
     // fingerprint of an untextured scene is the one before textures existed).
     for (i, m) in scene.materials.iter().enumerate() {
@@ -229,9 +239,25 @@ mod encoding {
 
     #[derive(Debug)]
     pub(super) enum Light {
-        Point { position: Vec3A, intensity: Vec3A },
+        Point {
+            position: Vec3A,
+            intensity: Vec3A,
+        },
         Area(AreaLight),
-        Environment { radiance: Vec3A },
+        Environment {
+            radiance: Vec3A,
+        },
+        Spot {
+            position: Vec3A,
+            axis: Vec3A,
+            intensity: Vec3A,
+            cutoff: f32,
+            beam_width: f32,
+        },
+        Directional {
+            direction: Vec3A,
+            irradiance: Vec3A,
+        },
     }
 
     #[derive(Debug)]
@@ -260,6 +286,17 @@ mod encoding {
                     samples: a.samples,
                 }),
                 scene::Light::Environment { radiance, .. } => Light::Environment { radiance: *radiance },
+                scene::Light::Spot(s) => Light::Spot {
+                    position: s.position,
+                    axis: s.axis,
+                    intensity: s.intensity,
+                    cutoff: s.cutoff,
+                    beam_width: s.beam_width,
+                },
+                scene::Light::Directional { direction, irradiance } => Light::Directional {
+                    direction: *direction,
+                    irradiance: *irradiance,
+                },
             }
         }
     }

@@ -171,6 +171,10 @@ pub enum LightKind {
     Area,
     /// `"environment"`: constant radiance from every direction.
     Environment,
+    /// `"spot"`: a point light limited to a cone.
+    Spot,
+    /// `"directional"`: parallel light from infinitely far.
+    Directional,
 }
 
 /// Object type names.
@@ -329,6 +333,10 @@ pub struct MaterialDesc {
     pub conductor: Option<Spanned<ConductorDesc>>,
     /// `[materials.NAME.coating]`.
     pub coating: Option<Spanned<CoatingDesc>>,
+    /// Emitted radiance: a colour, a number or a texture.
+    pub emission: Option<Spanned<ParamDesc>>,
+    /// Scale of `emission`.
+    pub emission_strength: Option<Spanned<f64>>,
 }
 
 /// `[materials.NAME.mirror]`.
@@ -412,6 +420,14 @@ pub struct LightDesc {
     pub file: Option<Spanned<String>>,
     /// Environment: rotation of the image, degrees about x then y then z.
     pub rotate: Option<Spanned<Vec3Desc>>,
+    /// Spot: the point the cone's axis goes through.
+    pub look_at: Option<Spanned<Vec3Desc>>,
+    /// Spot: the cone's axis; directional: the direction light travels in.
+    pub direction: Option<Spanned<Vec3Desc>>,
+    /// Spot: half-angle of the cone, degrees.
+    pub cutoff_angle: Option<Spanned<f64>>,
+    /// Spot: half-angle of full intensity, degrees.
+    pub beam_width: Option<Spanned<f64>>,
 }
 
 /// `[[objects]]`: the keys of every object type (the loader checks which

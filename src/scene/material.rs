@@ -104,6 +104,11 @@ pub struct Material {
     pub conductor: Option<Conductor>,
     /// Optional clear coating over the diffuse albedo.
     pub coating: Option<Coating>,
+    /// Radiance emitted from the front of every surface with this material
+    /// (W/m²/sr per channel; the side the geometric normal faces). Non-zero
+    /// makes each object using it an area light that also reflects by the
+    /// rest of the material, as Mitsuba's `area` emitter on a shape.
+    pub emission: Vec3A,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -158,6 +163,8 @@ pub struct MaterialTextures {
     pub dielectric_roughness: Option<Texture>,
     /// Replaces the conductor's roughness (scalar).
     pub conductor_roughness: Option<Texture>,
+    /// Multiplies [`Material::emission`] (which then holds the strength).
+    pub emission: Option<Texture>,
     /// Perturbs the shading normal.
     pub normal_map: Option<NormalMap>,
     /// Cuts holes.
@@ -183,6 +190,7 @@ impl MaterialTextures {
             ("dielectric.tint", &self.dielectric_tint),
             ("dielectric.roughness", &self.dielectric_roughness),
             ("conductor.roughness", &self.conductor_roughness),
+            ("emission", &self.emission),
         ]
         .into_iter()
         .filter_map(|(name, t)| t.as_ref().map(|t| (name, t)))
@@ -222,7 +230,25 @@ impl Material {
             dielectric: None,
             conductor: None,
             coating: None,
+            emission: Vec3A::ZERO,
             textures: None,
+        }
+    }
+
+    /// True when surfaces with this material emit light somewhere.
+    pub fn emits(&self) -> bool {
+        match self.textures.as_deref().and_then(|t| t.emission.as_ref()) {
+            Some(t) => (t.max_value() * self.emission).max_element() > 0.0,
+            None => self.emission.max_element() > 0.0,
+        }
+    }
+
+    /// The emitted radiance at texture coordinates `uv` (front side).
+    #[inline]
+    pub fn emission_at(&self, uv: Vec2) -> Vec3A {
+        match self.textures.as_deref().and_then(|t| t.emission.as_ref()) {
+            Some(t) => t.eval(uv) * self.emission,
+            None => self.emission,
         }
     }
 
@@ -264,6 +290,7 @@ impl Material {
                 ..c
             }),
             coating: self.coating,
+            emission: self.emission_at(uv),
             textures: None,
         }
     }

@@ -335,15 +335,11 @@ impl ViewerApp {
     fn lights(&mut self, ui: &mut egui::Ui) {
         let edit = &mut self.core.edit;
         for (i, (light, l)) in edit.scene.lights.iter().zip(edit.lights.iter_mut()).enumerate() {
-            let kind = match light {
-                Light::Point { .. } => "point",
-                Light::Area(_) => "area",
-                Light::Environment { .. } => "environment",
-            };
+            let kind = light.kind_name();
             egui::CollapsingHeader::new(format!("light {i} ({kind})"))
                 .default_open(i == 0)
                 .show(ui, |ui| {
-                    if !matches!(light, Light::Environment { .. }) {
+                    if light.position().is_some() {
                         vec3_drag(ui, "position", &mut l.position, 0.01);
                     }
                     colour_edit(ui, "colour", &mut l.colour);

@@ -24,6 +24,9 @@ pub struct LightEdit {
     pub intensity: f32,
     /// Area light: shadow rays per shading point.
     pub samples: u32,
+    /// Spot light: the file's `look_at`, which keeps aiming the cone when
+    /// the light moves (as the saved file will).
+    pub look_at: Option<Vec3A>,
 }
 
 /// A scene being edited.
@@ -141,16 +144,17 @@ impl EditableScene {
                     .and_then(|t| vec3_of(t.get("colour").or_else(|| t.get("color"))))
                     .unwrap_or(Vec3A::ONE);
                 let intensity = t.and_then(|t| number_of(t.get("intensity"))).unwrap_or(1.0);
-                let (position, samples) = match light {
-                    Light::Point { position, .. } => (*position, 1),
-                    Light::Area(a) => (a.center, a.samples),
-                    Light::Environment { .. } => (Vec3A::ZERO, 1),
+                let position = light.position().unwrap_or(Vec3A::ZERO);
+                let samples = match light {
+                    Light::Area(a) => a.samples,
+                    _ => 1,
                 };
                 LightEdit {
                     position,
                     colour,
                     intensity,
                     samples,
+                    look_at: t.and_then(|t| vec3_of(t.get("look_at"))),
                 }
             })
             .collect();
@@ -198,6 +202,14 @@ impl EditableScene {
                     a.radiance = power;
                     a.samples = edit.samples.max(1);
                 }
+                Light::Spot(s) => {
+                    s.position = edit.position;
+                    s.intensity = power;
+                    if let Some(axis) = edit.look_at.and_then(|t| (t - edit.position).try_normalize()) {
+                        s.axis = axis;
+                    }
+                }
+                Light::Directional { irradiance, .. } => *irradiance = power,
                 Light::Environment { radiance, .. } => *radiance = power,
             }
         }
@@ -250,12 +262,12 @@ impl EditableScene {
                 set(t, "colour", toml_vec3(edit.colour));
                 set(t, "intensity", value(toml_number(edit.intensity)));
                 match light {
-                    Light::Point { .. } => set(t, "position", toml_vec3(edit.position)),
+                    Light::Point { .. } | Light::Spot(_) => set(t, "position", toml_vec3(edit.position)),
                     Light::Area(_) => {
                         set(t, "position", toml_vec3(edit.position));
                         set(t, "samples", value(edit.samples.max(1) as i64));
                     }
-                    Light::Environment { .. } => {}
+                    Light::Environment { .. } | Light::Directional { .. } => {}
                 }
             }
         }

@@ -163,8 +163,9 @@ impl<'s> RayGenerator<'s> {
         }
         match &lights[rng.below(lights.len() as u32) as usize] {
             Light::Point { position, .. } => *position,
+            Light::Spot(s) => s.position,
             Light::Area(area) => area.point(Vec2::new(rng.f32(), rng.f32())),
-            Light::Environment { .. } => Self::in_box(&self.bounds, rng),
+            Light::Environment { .. } | Light::Directional { .. } => Self::in_box(&self.bounds, rng),
         }
     }
 

@@ -20,15 +20,21 @@
 //!   `Φ_p = I · ΣΩ / (n(ω) · N · P_light)`; for one cone that is
 //!   `Φ · (Ω/4π) / N`: the light's power times the solid-angle fraction
 //!   covered, shared by the `N` photons;
-//! - area light of radiance `L`, area `A`, the point `x` uniform on it
-//!   (density `1/A`): `Φ_p = L · A · max(0, cos θ) · ΣΩ / (n(ω) · N · P_light)`
-//!   (the cosine of the one-sided emitter is applied to the power, and a
-//!   direction behind the light carries nothing).
+//! - spot light: the same with `I` times the falloff toward `ω`;
+//! - area light (a rectangle or an emitting object) of radiance `L`, area
+//!   `A`, the point `x` uniform on it (density `1/A`):
+//!   `Φ_p = L · A · max(0, cos θ) · ΣΩ / (n(ω) · N · P_light)` (the cosine
+//!   of the one-sided emitter is applied to the power, and a direction
+//!   behind the light carries nothing);
+//! - directional light of irradiance `E`: `x` uniform on the disk of the
+//!   scene's bounding sphere facing the light, the one direction of the
+//!   light, `Φ_p = E · π r² / (N · P_light)` (no cones).
 //!
 //! When `x` lies inside a caster's bounding sphere the cone is the whole
 //! sphere: that photon uses the light's full distribution instead (uniform
-//! sphere for a point light, `Φ_p = 4πI / (N P)`; cosine-weighted
-//! hemisphere for an area light, `Φ_p = π L A / (N P)`), which is also
+//! sphere for a point light, `Φ_p = 4πI / (N P)`; the cutoff cone for a
+//! spot light; cosine-weighted hemisphere for an area light,
+//! `Φ_p = π L A / (N P)`), which is also
 //! unbiased since the choice depends on `x` only. A light is chosen with
 //! probability `P_light` proportional to its power, among the lights that
 //! have a caster in front of them (the others cannot light a caustic).
@@ -64,10 +70,10 @@ use crate::bsdf::{Bsdf, Transport};
 use crate::integrator::fog;
 use crate::integrator::medium::{Flight, MediumTracker, WaterVolume};
 use crate::math::rng::{Domain, Rng};
-use crate::math::sampling::{cosine_hemisphere, morton_stratified, uniform_cone, uniform_sphere};
+use crate::math::sampling::{morton_stratified, uniform_cone};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
 use crate::scene::FresnelModel;
-use crate::scene::{Light, Scene, Shape};
+use crate::scene::{Scene, Shape};
 use std::f32::consts::PI;
 
 /// Bounding sphere of a specular object.
@@ -138,7 +144,7 @@ pub enum PhotonRules {
 /// area light) and its selection probability.
 #[derive(Clone, Debug)]
 struct Emitter {
-    light: Light,
+    light: crate::scene::light::Emitter,
     casters: Vec<Caster>,
     probability: f32,
 }
@@ -180,6 +186,11 @@ impl PhotonPath {
     /// The ray the photon travels along next.
     pub fn ray(&self) -> &Ray {
         &self.ray
+    }
+
+    /// The power the photon carries.
+    pub fn power(&self) -> Vec3A {
+        self.power
     }
 }
 
@@ -223,23 +234,23 @@ impl<'a> PhotonTracer<'a> {
 
     /// Like [`new`](Self::new), with emission restricted to `casters`.
     pub fn with_casters(scene: &'a Scene, accel: &'a dyn Accel, count: u64, casters: Vec<Caster>) -> Self {
-        let mut emitters: Vec<Emitter> = scene
-            .lights
-            .iter()
+        use crate::scene::light::Emitter as Light;
+        let mut emitters: Vec<Emitter> = Light::all(scene)
+            .into_iter()
             .map(|light| {
-                let casters = match light {
-                    Light::Point { .. } => casters.clone(),
+                let casters = match &light {
                     Light::Environment { .. } => Vec::new(),
                     // Entirely behind the emitting plane: every direction to
                     // it has cos θ ≤ 0 and carries no power.
-                    Light::Area(a) => casters
+                    Light::Rect(a) => casters
                         .iter()
                         .copied()
                         .filter(|c| (c.center - a.center).dot(a.normal) > -c.radius)
                         .collect(),
+                    _ => casters.clone(),
                 };
                 Emitter {
-                    light: light.clone(),
+                    light,
                     casters,
                     probability: 0.0,
                 }
@@ -301,34 +312,28 @@ impl<'a> PhotonTracer<'a> {
         let which = self.cdf.partition_point(|&c| c <= u).min(self.emitters.len() - 1);
         let e = &self.emitters[which];
         let scale = 1.0 / (self.count as f32 * e.probability);
-        let (origin, dir, power) = match &e.light {
-            Light::Point { position, intensity } => {
-                let (pick, u) = self.direction_sample(index, &mut rng);
-                match sample_cones(*position, &e.casters, pick, u) {
-                    Some((dir, solid_angle)) => (*position, dir, *intensity * (solid_angle * scale)),
-                    None => (*position, uniform_sphere(u), *intensity * (4.0 * PI * scale)),
-                }
-            }
-            Light::Area(a) => {
-                let x = a.point(Vec2::from(rng.f32x2()));
-                let (pick, u) = self.direction_sample(index, &mut rng);
-                match sample_cones(x, &e.casters, pick, u) {
-                    Some((dir, solid_angle)) => {
-                        let cos = dir.dot(a.normal);
-                        if cos <= 0.0 {
-                            return None; // behind the one-sided emitter: no power
-                        }
-                        (x, dir, a.radiance * (a.area() * cos * solid_angle * scale))
-                    }
-                    None => {
-                        let dir = Frame::from_normal(a.normal).to_world(cosine_hemisphere(u));
-                        (x, dir, a.radiance * (PI * a.area() * scale))
-                    }
-                }
-            }
-            // Environments emit no photons: they have no casters (`new`).
-            Light::Environment { .. } => return None,
+        // Points draw no position (the maps of point lights predate the
+        // other kinds and keep their streams).
+        let u_origin = if e.light.is_point() {
+            Vec2::ZERO
+        } else {
+            Vec2::from(rng.f32x2())
         };
+        let o = e.light.sample_origin(u_origin)?;
+        let (pick, u) = self.direction_sample(index, &mut rng);
+        let cones = if o.direction.is_some() {
+            None
+        } else {
+            sample_cones(o.x, &e.casters, pick, u)
+        };
+        let (dir, power) = match cones {
+            Some((dir, solid_angle)) => (dir, e.light.intensity(&o, dir) * solid_angle),
+            None => e.light.sample_direction(&o, u),
+        };
+        if power.max_element() <= 0.0 {
+            return None; // behind a one-sided emitter, or outside a spot's cone
+        }
+        let (origin, power) = (o.x, power * scale);
         let in_water = self.water.as_ref().is_some_and(|w| w.contains(origin));
         Some(PhotonPath {
             index,
@@ -630,6 +635,7 @@ pub fn sample_cones(x: Vec3A, casters: &[Caster], pick: f32, v: Vec2) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::sampling::uniform_sphere;
 
     #[test]
     fn cone_sampling_density_integrates_to_one() {

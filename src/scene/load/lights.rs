@@ -1,11 +1,11 @@
-//! The `[[lights]]`: point, area and environment lights, with the limit and
-//! default of an area light's shadow samples.
+//! The `[[lights]]`: point, spot, directional, area and environment lights,
+//! with the limit and default of an area light's shadow samples.
 
 use super::ctx::Ctx;
 use super::error::SceneError;
 use crate::math::{Transform, Vec3, Vec3A};
 use crate::scene::desc::{LightDesc, LightKind};
-use crate::scene::light::EnvironmentMap;
+use crate::scene::light::{EnvironmentMap, SpotLight};
 use crate::scene::{AreaLight, Light};
 use crate::texture::ColourSpace;
 use std::sync::Arc;
@@ -14,15 +14,22 @@ use std::sync::Arc;
 pub const MAX_AREA_LIGHT_SAMPLES: u32 = 4096;
 /// Default shadow samples of an area light (the original report used 32).
 pub const DEFAULT_AREA_LIGHT_SAMPLES: u32 = 32;
+/// Default half-angle of a spot light's cone, degrees (Mitsuba's `spot`).
+pub const DEFAULT_SPOT_CUTOFF_DEG: f32 = 20.0;
 
 impl Ctx<'_> {
     pub(super) fn light(&self, l: &LightDesc) -> Result<Light, SceneError> {
         let present = [
+            ("position", l.position.as_ref().map(|s| s.span())),
             ("u", l.u.as_ref().map(|s| s.span())),
             ("v", l.v.as_ref().map(|s| s.span())),
             ("samples", l.samples.as_ref().map(|s| s.span())),
             ("file", l.file.as_ref().map(|s| s.span())),
             ("rotate", l.rotate.as_ref().map(|s| s.span())),
+            ("look_at", l.look_at.as_ref().map(|s| s.span())),
+            ("direction", l.direction.as_ref().map(|s| s.span())),
+            ("cutoff_angle", l.cutoff_angle.as_ref().map(|s| s.span())),
+            ("beam_width", l.beam_width.as_ref().map(|s| s.span())),
         ];
         let colour = match &l.colour {
             None => Vec3A::ONE,
@@ -53,16 +60,11 @@ impl Ctx<'_> {
                 })
             }
             LightKind::Environment => {
-                let present = [
-                    ("u", l.u.as_ref().map(|s| s.span())),
-                    ("v", l.v.as_ref().map(|s| s.span())),
-                    ("samples", l.samples.as_ref().map(|s| s.span())),
-                    ("position", l.position.as_ref().map(|s| s.span())),
-                    (
-                        "rotate",
-                        l.rotate.as_ref().filter(|_| l.file.is_none()).map(|s| s.span()),
-                    ),
-                ];
+                // `rotate` turns an image: without `file` it is refused.
+                let mut present = present.clone();
+                if l.file.is_some() {
+                    present[5].1 = None;
+                }
                 self.only_keys(
                     "an environment light (without `file`)",
                     &present,
@@ -84,8 +86,84 @@ impl Ctx<'_> {
                 };
                 Ok(Light::Environment { radiance: power, map })
             }
+            LightKind::Spot => {
+                let what = "a spot light";
+                self.only_keys(
+                    what,
+                    &present,
+                    &[
+                        "type",
+                        "position",
+                        "look_at",
+                        "direction",
+                        "cutoff_angle",
+                        "beam_width",
+                        "colour",
+                        "intensity",
+                    ],
+                )?;
+                let position = self.vec3(self.required(&l.position, "position", what, l.kind.span())?, "position")?;
+                let axis = match (&l.look_at, &l.direction) {
+                    (Some(t), None) => (self.vec3(t, "look_at")? - position)
+                        .try_normalize()
+                        .ok_or_else(|| self.invalid(t.span(), "`look_at` is the spot light's `position`"))?,
+                    (None, Some(d)) => self.direction(d, "direction")?.normalize(),
+                    (Some(_), Some(d)) => {
+                        return Err(self.invalid(d.span(), "a spot light takes `look_at` or `direction`, not both"))
+                    }
+                    (None, None) => {
+                        return Err(self.invalid(l.kind.span(), "a spot light needs `look_at` or `direction`"))
+                    }
+                };
+                let cutoff = match &l.cutoff_angle {
+                    None => DEFAULT_SPOT_CUTOFF_DEG,
+                    Some(s) => {
+                        let x = self.number(s, "cutoff_angle")?;
+                        if !(x > 0.0 && x <= 90.0) {
+                            return Err(
+                                self.invalid(s.span(), format!("`cutoff_angle` = {x} must be in (0, 90] degrees"))
+                            );
+                        }
+                        x
+                    }
+                };
+                let beam_width = match &l.beam_width {
+                    None => 0.75 * cutoff,
+                    Some(s) => {
+                        let x = self.number(s, "beam_width")?;
+                        if !(0.0..=cutoff).contains(&x) {
+                            return Err(self.invalid(
+                                s.span(),
+                                format!("`beam_width` = {x} must be in [0, cutoff_angle = {cutoff}] degrees"),
+                            ));
+                        }
+                        x
+                    }
+                };
+                Ok(Light::Spot(SpotLight {
+                    position,
+                    axis,
+                    intensity: power,
+                    cutoff: cutoff.to_radians(),
+                    beam_width: beam_width.to_radians(),
+                }))
+            }
+            LightKind::Directional => {
+                let what = "a directional light";
+                self.only_keys(what, &present, &["type", "direction", "colour", "intensity"])?;
+                let d = self.required(&l.direction, "direction", what, l.kind.span())?;
+                Ok(Light::Directional {
+                    direction: self.direction(d, "direction")?.normalize(),
+                    irradiance: power,
+                })
+            }
             LightKind::Area => {
                 let what = "an area light";
+                self.only_keys(
+                    what,
+                    &present,
+                    &["type", "position", "u", "v", "samples", "colour", "intensity"],
+                )?;
                 let position = self.vec3(self.required(&l.position, "position", what, l.kind.span())?, "position")?;
                 let u_desc = self.required(&l.u, "u", what, l.kind.span())?;
                 let v_desc = self.required(&l.v, "v", what, l.kind.span())?;

@@ -178,6 +178,35 @@ impl Ctx<'_> {
                 Some(Coating { ior })
             }
         };
+        let (emission, emission_tex) = self.colour_param(&m.emission, "emission", Vec3A::ZERO, None)?;
+        let strength = match &m.emission_strength {
+            None => 1.0,
+            Some(s) if m.emission.is_none() => {
+                return Err(self.invalid(s.span(), "`emission_strength` without an `emission`"));
+            }
+            Some(s) => {
+                let x = self.number(s, "emission_strength")?;
+                if x < 0.0 {
+                    return Err(self.invalid(s.span(), format!("`emission_strength` = {x} must be ≥ 0")));
+                }
+                x
+            }
+        };
+        // A textured emission keeps its texels and scales them by the strength.
+        let emission = if emission_tex.is_some() {
+            Vec3A::splat(strength)
+        } else {
+            emission * strength
+        };
+        if !emission.is_finite() {
+            let span = m
+                .emission_strength
+                .as_ref()
+                .or(None)
+                .map_or_else(|| m.emission.as_ref().map_or(0..0, |s| s.span()), |s| s.span());
+            return Err(self.invalid(span, "`emission` × `emission_strength` overflows single precision"));
+        }
+        textures.emission = emission_tex;
         if let Some(n) = &m.normal_map {
             let scale = match &m.normal_scale {
                 None => 1.0,
@@ -225,6 +254,7 @@ impl Ctx<'_> {
             dielectric,
             conductor,
             coating,
+            emission,
         })
     }
 

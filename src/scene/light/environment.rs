@@ -1,34 +1,10 @@
-//! Light sources, physically based so that direct light and photon power agree.
+//! Latitude-longitude environment images and their importance sampling.
 
 use crate::math::distribution::Distribution2D;
 use crate::math::{Mat3A, Vec2, Vec3A};
 use crate::texture::{luminance, FilterMode, Image, WrapMode};
 use std::f32::consts::PI;
 use std::sync::Arc;
-
-/// A light.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Light {
-    /// Isotropic point light: radiant intensity `intensity` (W/sr per channel);
-    /// irradiance at distance r falls off as cos θ / r².
-    Point {
-        /// Position.
-        position: Vec3A,
-        /// Colour × intensity.
-        intensity: Vec3A,
-    },
-    /// One-sided rectangle emitting radiance `radiance` from the side of
-    /// `normal = normalize(u × v)`.
-    Area(AreaLight),
-    /// Radiance arriving from every direction, infinitely far: constant,
-    /// or a latitude-longitude image times `radiance`.
-    Environment {
-        /// Colour × intensity (W/m²/sr per channel); the map's scale.
-        radiance: Vec3A,
-        /// The image, when the environment is not constant.
-        map: Option<Arc<EnvironmentMap>>,
-    },
-}
 
 /// A latitude-longitude environment image (Mitsuba's `envmap`, y up): the
 /// direction `d` (in the map's frame) reads `u = atan2(d.x, −d.z) / 2π`,
@@ -151,81 +127,5 @@ impl EnvironmentMap {
     /// The mean radiance over the sphere, per channel (`∫ L dω / 4π`).
     pub fn mean(&self) -> Vec3A {
         self.integral / (4.0 * PI)
-    }
-}
-
-/// Rectangular area light centred on `center` with edges `u` and `v`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AreaLight {
-    /// Centre of the rectangle.
-    pub center: Vec3A,
-    /// First edge (full length).
-    pub u: Vec3A,
-    /// Second edge (full length).
-    pub v: Vec3A,
-    /// Unit emitting normal, `normalize(u × v)`.
-    pub normal: Vec3A,
-    /// Emitted radiance: colour × intensity (W/m²/sr per channel).
-    pub radiance: Vec3A,
-    /// Shadow rays per shading point (the original report used 32).
-    pub samples: u32,
-}
-
-impl AreaLight {
-    /// Builds the light; `None` if the edges are degenerate.
-    pub fn new(center: Vec3A, u: Vec3A, v: Vec3A, radiance: Vec3A, samples: u32) -> Option<Self> {
-        let normal = u.cross(v).try_normalize()?;
-        Some(Self {
-            center,
-            u,
-            v,
-            normal,
-            radiance,
-            samples: samples.max(1),
-        })
-    }
-
-    /// Point on the rectangle for `s ∈ [0,1)²`.
-    #[inline]
-    pub fn point(&self, s: Vec2) -> Vec3A {
-        self.center + self.u * (s.x - 0.5) + self.v * (s.y - 0.5)
-    }
-
-    /// Area of the rectangle.
-    pub fn area(&self) -> f32 {
-        self.u.cross(self.v).length()
-    }
-
-    /// Total emitted power `π · A · L` (cosine-weighted hemisphere).
-    pub fn power(&self) -> Vec3A {
-        self.radiance * (std::f32::consts::PI * self.area())
-    }
-}
-
-impl Light {
-    /// Total emitted power (W per channel) of a point or area light. An
-    /// environment's power depends on the scene it surrounds: 0 here (see
-    /// `integrator::lights` for the power used to sample it).
-    pub fn power(&self) -> Vec3A {
-        match self {
-            Light::Point { intensity, .. } => *intensity * (4.0 * std::f32::consts::PI),
-            Light::Area(a) => a.power(),
-            Light::Environment { .. } => Vec3A::ZERO,
-        }
-    }
-
-    /// The radiance an environment light sends from direction `dir`.
-    #[inline]
-    pub fn environment_radiance(radiance: Vec3A, map: &Option<Arc<EnvironmentMap>>, dir: Vec3A) -> Vec3A {
-        match map {
-            None => radiance,
-            Some(m) => radiance * m.eval(dir),
-        }
-    }
-
-    /// The photon pass emits from this light (point and area lights; an
-    /// environment lights the scene without photons).
-    pub fn emits_photons(&self) -> bool {
-        !matches!(self, Light::Environment { .. })
     }
 }
