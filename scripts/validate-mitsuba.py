@@ -5,7 +5,10 @@ scene, relMSE (epsilon 1e-2) and the ratio of the mean of each channel.
 
 Scenes: Mitsuba's Cornell box (diffuse); the same box with a mirror sphere
 and a glass sphere instead of the blocks; the box with a rough gold sphere,
-a rough glass sphere and a plastic sphere.
+a rough glass sphere and a plastic sphere; the box without its ceiling light
+lit by a spot light (spot), a directional light through its open front
+(sun), or an emitting sphere and an emitting panel that also reflect
+(emitters).
 
 Usage:
   python3 -m pip install mitsuba numpy      # once (a virtual environment is fine)
@@ -118,6 +121,33 @@ def with_material_spheres(d):
     return d
 
 
+def with_lights(d, kind):
+    """The box without its ceiling light, lit by a spot light, a
+    directional light through the open front, or two emitting shapes that
+    also reflect (a sphere and a rectangle with white diffuse BSDFs)."""
+    del d["light"]
+    if kind == "spot":
+        d["spot"] = {"type": "spot", "intensity": {"type": "rgb", "value": [6.0, 5.0, 4.0]},
+                     "cutoff_angle": 35.0, "beam_width": 20.0,
+                     "to_world": T().look_at(origin=[0.2, 0.95, 0.1], target=[-0.2, -1.0, -0.1], up=[0, 0, 1])}
+    elif kind == "sun":
+        d["sun"] = {"type": "directional", "direction": [-0.25, -0.35, -1.0],
+                    "irradiance": {"type": "rgb", "value": [3.0, 2.8, 2.5]}}
+    else:
+        d["lamp-sphere"] = {"type": "sphere", "center": [0.35, -0.55, 0.1], "radius": 0.25,
+                            "bsdf": {"type": "ref", "id": "white"},
+                            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [4.0, 3.0, 2.0]}}}
+        d["lamp-panel"] = {"type": "rectangle", "bsdf": {"type": "ref", "id": "white"},
+                           "to_world": T().translate([-0.5, 0.3, -0.99]).scale(0.25),
+                           "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2.0, 3.0, 5.0]}}}
+    return d
+
+
+def emitting_material(name, bsdf, emitter):
+    """`bsdf` with the emission of area emitter `emitter`, as material `name`."""
+    return caustic_material(name, bsdf) + f"\nemission = {fmt(emitter['radiance']['value'])}"
+
+
 def caustic_material(name, bsdf):
     t = bsdf["type"]
     lines = [f"[materials.{name}]"]
@@ -169,20 +199,36 @@ def caustic_scene(d, spp, seed=1):
         if isinstance(value, dict) and value.get("type") in (
                 "diffuse", "conductor", "dielectric", "roughconductor", "roughdielectric", "plastic"):
             out += [caustic_material(key, value), ""]
+    def material_of(key, value):
+        """The material of shape `key`: its BSDF's, or a copy that emits."""
+        if "emitter" not in value:
+            return value["bsdf"]["id"]
+        out.extend([emitting_material(f"{key}-emitting", d[value["bsdf"]["id"]], value["emitter"]), ""])
+        return f"{key}-emitting"
+
     for key, value in d.items():
         if not isinstance(value, dict):
             continue
         t = value.get("type")
-        if t == "rectangle":
+        if t == "spot":
+            m = matrix(value["to_world"])
+            out += ["[[lights]]", 'type = "spot"', f"position = {fmt(point(m, [0, 0, 0]))}",
+                    f"direction = {fmt(vector(m, [0, 0, 1]))}", f"cutoff_angle = {value['cutoff_angle']}",
+                    f"beam_width = {value['beam_width']}", f"colour = {fmt(value['intensity']['value'])}", ""]
+        elif t == "directional":
+            out += ["[[lights]]", 'type = "directional"', f"direction = {fmt(value['direction'])}",
+                    f"colour = {fmt(value['irradiance']['value'])}", ""]
+        elif t == "rectangle":
             m = matrix(value["to_world"])
             corner, u, v = point(m, [-1, -1, 0]), vector(m, [2, 0, 0]), vector(m, [0, 2, 0])
-            if "emitter" in value:
+            if "emitter" in value and value["bsdf"]["id"] == "black":
                 out += ["[[lights]]", 'type = "area"', f"position = {fmt(point(m, [0, 0, 0]))}",
                         f"u = {fmt(u)}", f"v = {fmt(v)}",
                         f"colour = {fmt(value['emitter']['radiance']['value'])}", "intensity = 1.0", ""]
                 continue
+            material = material_of(key, value)
             out += ["[[objects]]", f'name = "{key}"', 'type = "quad"', f"corner = {fmt(corner)}",
-                    f"u = {fmt(u)}", f"v = {fmt(v)}", f'material = "{value["bsdf"]["id"]}"', ""]
+                    f"u = {fmt(u)}", f"v = {fmt(v)}", f'material = "{material}"', ""]
         elif t == "cube":
             m = matrix(value["to_world"])
             # The six faces of [-1, 1]^3, each facing outward (u × v).
@@ -194,8 +240,9 @@ def caustic_scene(d, spp, seed=1):
                         f"u = {fmt(vector(m, a))}", f"v = {fmt(vector(m, b))}",
                         f'material = "{value["bsdf"]["id"]}"', ""]
         elif t == "sphere":
+            material = material_of(key, value)
             out += ["[[objects]]", f'name = "{key}"', 'type = "sphere"', f"center = {fmt(value['center'])}",
-                    f"radius = {value['radius']}", f'material = "{value["bsdf"]["id"]}"', ""]
+                    f"radius = {value['radius']}", f'material = "{material}"', ""]
     return "\n".join(out)
 
 
@@ -203,6 +250,9 @@ SCENES = {
     "cornell": lambda size: cornell(size),
     "specular": lambda size: with_specular_spheres(cornell(size, boxes=False)),
     "materials": lambda size: with_material_spheres(cornell(size, boxes=False)),
+    "spot": lambda size: with_lights(cornell(size), "spot"),
+    "sun": lambda size: with_lights(cornell(size), "sun"),
+    "emitters": lambda size: with_lights(cornell(size), "emitters"),
 }
 
 
