@@ -2,7 +2,7 @@
 
 use crate::math::distribution::Distribution2D;
 use crate::math::{Mat3A, Vec2, Vec3A};
-use crate::texture::{luminance, FilterMode, Image, WrapMode};
+use crate::texture::{luminance, Image};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -89,14 +89,27 @@ impl EnvironmentMap {
     }
 
     /// The image's radiance arriving from direction `dir` (toward the scene
-    /// along `−dir`), before the light's scale.
+    /// along `−dir`), before the light's scale: bilinear between texels
+    /// placed as Mitsuba 3's `envmap` places them (fitted to its `eval`):
+    /// column `i` at `u = (i + ½) / w`, periodic in `u`, and row `j` at
+    /// `v = j / (h − 1)`, the first and last rows on the poles.
     #[inline]
     pub fn eval(&self, dir: Vec3A) -> Vec3A {
         let (uv, _) = self.uv(dir);
-        let c = self
-            .image
-            .lookup(uv, [WrapMode::Repeat, WrapMode::Clamp], FilterMode::Bilinear);
-        Vec3A::from(c.truncate()).max(Vec3A::ZERO)
+        let (w, h) = (self.image.width, self.image.height);
+        let x = uv.x * w as f32 - 0.5;
+        let y = uv.y * h.saturating_sub(1) as f32;
+        let xf = x.floor();
+        let fx = (x - xf).clamp(0.0, 1.0);
+        let x0 = (xf as i64).rem_euclid(i64::from(w)) as u32;
+        let y0 = (y.floor().max(0.0) as u32).min(h.saturating_sub(2));
+        let fy = (y - y0 as f32).clamp(0.0, 1.0);
+        let x1 = (x0 + 1) % w;
+        let y1 = (y0 + 1).min(h - 1);
+        let t = |x: u32, y: u32| Vec3A::from(self.image.texel(x, y).truncate());
+        let top = t(x0, y0) * (1.0 - fx) + t(x1, y0) * fx;
+        let bottom = t(x0, y1) * (1.0 - fx) + t(x1, y1) * fx;
+        (top * (1.0 - fy) + bottom * fy).max(Vec3A::ZERO)
     }
 
     /// A direction toward the environment for `u ∈ [0, 1)²` and its density
