@@ -28,6 +28,14 @@ with different seeds and averages them; the halves' differences then give
 the standard error of each mean ratio and the relMSE that the two images'
 noise alone would give (the rest is bias, e.g. the photon map's blur).
 
+With --xml FILE[,FILE...], both renderers render each Mitsuba XML scene
+file as it is (caustic reads Mitsuba's format): `-D NAME=VALUE` sets the
+files' parameters for both (e.g. -D resx=128), the sample counts are
+--spp-caustic and --spp-mitsuba, and --variant picks Mitsuba's variant
+(scalar_rgb or llvm_ad_rgb). --reference-exr F1,F2,... (one per --xml file,
+empty to skip) also compares caustic's image with an EXR rendered elsewhere,
+such as the references Mitsuba's test scenes come with.
+
 With --equal-time SPP,SPP,..., both renderers render the Cornell box at those
 sample counts instead, and the script prints render time and relMSE against a
 converged Mitsuba image, and the ratio of the errors at equal time (time
@@ -355,11 +363,19 @@ def main():
                     help="two half renders per image: standard errors of the mean ratios and the noise's relMSE")
     ap.add_argument("--json", help="also write the results as JSON")
     ap.add_argument("--binary", help="the caustic binary to run (default: built with cargo)")
+    ap.add_argument("--xml", help="comma-separated Mitsuba scene files rendered by both renderers")
+    ap.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
+                    help="a parameter of the --xml files (repeatable)")
+    ap.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant for --xml")
+    ap.add_argument("--film", help="WxH: the --xml files' film size for both renderers")
+    ap.add_argument("--reference-exr", default="", help="comma-separated EXRs, one per --xml file (may be empty)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     binary = caustic_binary(args.binary)
     results = []
-    if args.equal_time:
+    if args.xml:
+        results = xml_scenes(binary, args)
+    elif args.equal_time:
         results = equal_time(binary, args)
     else:
         modes = args.caustics.split(",")
@@ -419,6 +435,79 @@ def main():
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=2)
+
+
+def xml_scenes(binary, args):
+    """Each --xml file rendered by both renderers, as written (with -D)."""
+    if args.variant != "scalar_rgb":
+        mi.set_variant(args.variant)
+    defines = dict(d.split("=", 1) for d in args.define)
+    print(f"Mitsuba {mi.__version__} {mi.variant()}; defines: {defines or 'none'}"
+          + (f"; film {args.film}" if args.film else "")
+          + ("; ± standard error from two halves of each image" if args.halves else ""))
+    print(f"{'scene':<40} {'caustic spp':>11} {'s':>7} {'mitsuba spp':>11} {'s':>7} {'relMSE':>10}"
+          + (f" {'noise':>10}" if args.halves else "") + "  mean ratio R G B")
+    rows = []
+    files = args.xml.split(",")
+    refs = args.reference_exr.split(",") if args.reference_exr else [""] * len(files)
+    for path, ref_path in zip(files, refs):
+        name = os.path.splitext(os.path.basename(path))[0]
+
+        def mitsuba(spp, seed):
+            scene = mi.load_file(path, **defines)
+            if args.film:
+                params = mi.traverse(scene)
+                key = next(k for k in params.keys() if k.endswith("film.size"))
+                params[key] = mi.ScalarVector2u(*(int(v) for v in args.film.split("x")))
+                params.update()
+            start = time.time()
+            img = mi.render(scene, spp=spp, seed=seed)
+            return np.array(img, dtype=np.float64)[:, :, :3], time.time() - start
+
+        def caustic(spp, seed):
+            exr = os.path.join(args.out, f"{name}-caustic-part.exr")
+            cmd = [binary, "render", path, "--exr", exr, "--quiet", "--seed", str(seed), "--spp", str(spp),
+                   "--integrator", "path"]
+            for d in args.define:
+                cmd += ["-D", d]
+            if args.film:
+                w, h = args.film.split("x")
+                cmd += ["--width", w, "--height", h]
+            start = time.time()
+            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+            wall = time.time() - start
+            return np.array(mi.Bitmap(exr), dtype=np.float64)[:, :, :3], wall
+
+        theirs, t_theirs, theirs_h = halves_render(mitsuba, args.spp_mitsuba, (0, 1), args.halves)
+        ours, t_ours, ours_h = halves_render(caustic, args.spp_caustic, (1, 2), args.halves)
+        save_exr(os.path.join(args.out, f"{name}-mitsuba.exr"), theirs)
+        save_exr(os.path.join(args.out, f"{name}-caustic.exr"), ours)
+        e, r = relmse(ours, theirs), mean_ratio(ours, theirs)
+        row = {"scene": path, "defines": defines, "variant": mi.variant(), "caustic_spp": args.spp_caustic,
+               "caustic_seconds": t_ours, "mitsuba_spp": args.spp_mitsuba, "mitsuba_seconds": t_theirs,
+               "relmse": e, "mean_ratio": r}
+        line = (f"{name:<40} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} {t_theirs:>7.1f} "
+                f"{e:>10.3e}")
+        if args.halves:
+            whole = (slice(None), slice(None))
+            row["noise_relmse"] = noise_relmse(ours_h, theirs_h, theirs)
+            row["mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, whole)
+            line += f" {row['noise_relmse']:>10.3e}  " + " ".join(
+                f"{v:.4f}±{s:.4f}" for v, s in zip(r, row["mean_ratio_error"]))
+        else:
+            line += f"  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}"
+        if ref_path:
+            ref = np.array(mi.Bitmap(ref_path), dtype=np.float64)[:, :, :3]
+            row["reference"] = ref_path
+            row["reference_relmse"] = {"caustic": relmse(ours, ref), "mitsuba": relmse(theirs, ref)}
+            row["reference_mean_ratio"] = {"caustic": mean_ratio(ours, ref), "mitsuba": mean_ratio(theirs, ref)}
+            line += (f"\n    against {os.path.basename(ref_path)}: caustic relMSE {row['reference_relmse']['caustic']:.3e}"
+                     f" mean ratio " + " ".join(f"{v:.4f}" for v in row["reference_mean_ratio"]["caustic"])
+                     + f"; Mitsuba relMSE {row['reference_relmse']['mitsuba']:.3e} mean ratio "
+                     + " ".join(f"{v:.4f}" for v in row["reference_mean_ratio"]["mitsuba"]))
+        print(line, flush=True)
+        rows.append(row)
+    return rows
 
 
 def equal_time(binary, args):

@@ -189,7 +189,7 @@ impl Bsdf {
         let mut b = Self {
             lobes: [(Lobe::Lambert(Lambert { kd: Vec3A::ZERO }), 0.0); MAX_LOBES],
             count: 0,
-            two_sided: true,
+            two_sided: !m.one_sided,
             transport,
         };
         if let Some(d) = m.dielectric {

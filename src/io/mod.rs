@@ -9,6 +9,7 @@ pub mod image;
 pub mod obj;
 pub mod off;
 pub mod ply;
+pub mod serialized;
 mod source;
 
 use crate::geometry::Mesh;

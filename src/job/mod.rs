@@ -75,6 +75,9 @@ pub struct Overrides {
     pub denoise_quality: Option<DenoiseQuality>,
     /// How the path integrator finds caustics.
     pub caustics: Option<crate::scene::CausticsMode>,
+    /// `-D name=value` parameters of a Mitsuba scene, used when the file is
+    /// read (see [`crate::scene::load_scene_with`]).
+    pub defines: Vec<(String, String)>,
 }
 
 impl Overrides {
@@ -396,7 +399,7 @@ impl RenderJob {
     /// Loads and checks everything a render needs; nothing is rendered and no
     /// file is written.
     pub fn prepare(request: &RenderRequest) -> Result<Self, JobError> {
-        let mut scene = scene::load_scene(&request.scene)?;
+        let mut scene = scene::load_scene_with(&request.scene, &request.overrides.defines)?;
         let resumed = match &request.resume {
             Some(path) => Some(film::read_checkpoint(path)?),
             None => None,

@@ -337,6 +337,8 @@ pub struct MaterialDesc {
     pub emission: Option<Spanned<ParamDesc>>,
     /// Scale of `emission`.
     pub emission_strength: Option<Spanned<f64>>,
+    /// Scatter only on the front side (the side the normal faces).
+    pub one_sided: Option<Spanned<bool>>,
 }
 
 /// `[materials.NAME.mirror]`.

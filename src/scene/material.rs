@@ -109,6 +109,11 @@ pub struct Material {
     /// makes each object using it an area light that also reflects by the
     /// rest of the material, as Mitsuba's `area` emitter on a shape.
     pub emission: Vec3A,
+    /// Scatters only on the front, the side the shading normal faces, and
+    /// is black from behind (Mitsuba's BSDFs without `twosided`); else an
+    /// opaque surface reflects the same on both sides. Dielectrics always
+    /// tell the sides apart.
+    pub one_sided: bool,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -231,6 +236,7 @@ impl Material {
             conductor: None,
             coating: None,
             emission: Vec3A::ZERO,
+            one_sided: false,
             textures: None,
         }
     }
@@ -291,6 +297,7 @@ impl Material {
             }),
             coating: self.coating,
             emission: self.emission_at(uv),
+            one_sided: self.one_sided,
             textures: None,
         }
     }

@@ -3,13 +3,16 @@
 //! into shading data.
 
 pub mod camera;
+pub mod conductors;
 pub mod cutout;
 pub mod desc;
+pub mod ior;
 pub mod light;
 pub mod load;
 pub mod material;
 pub mod medium;
 pub mod metals;
+pub mod mitsuba;
 
 use crate::film::denoise::DenoiseQuality;
 pub use crate::film::{OutputSettings, ToneMap};
@@ -22,12 +25,39 @@ pub use crate::geometry::{WaterSurface, Wave};
 pub use camera::{Camera, FovAxis};
 pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
-pub use load::{load_scene, parse_scene, SceneError};
+pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
     AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, Mirror, NormalMap,
     ShadingModel,
 };
 pub use medium::Medium;
+
+/// Loads a scene file, choosing the format by extension: `.xml` is a
+/// Mitsuba scene (its warnings printed to stderr), anything else caustic's
+/// TOML.
+pub fn load_scene(path: &std::path::Path) -> Result<Scene, SceneError> {
+    load_scene_with(path, &[])
+}
+
+/// [`load_scene`] with `-D name=value` definitions for a Mitsuba scene's
+/// `$name` parameters (a TOML scene takes none).
+pub fn load_scene_with(path: &std::path::Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
+    if mitsuba::is_mitsuba_path(path) {
+        let loaded = mitsuba::load_mitsuba_scene(path, defines)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        return Ok(loaded.scene);
+    }
+    if let Some((name, _)) = defines.first() {
+        return Err(SceneError::Invalid {
+            path: path.into(),
+            place: load::Place { line: 1, column: 1 },
+            message: format!("-D {name}=…: only Mitsuba scenes (.xml) take parameters"),
+        });
+    }
+    load_toml_scene(path)
+}
 
 /// How secondary work is shared between a pixel's samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -71,7 +71,7 @@ pub fn run(scenes: &[PathBuf], options: &BenchOptions, progress: &dyn Fn(&str)) 
     let mut results = Vec::with_capacity(scenes.len());
     for path in scenes {
         progress(&format!("{}: loading", path.display()));
-        let scene = scene::load_scene(path)?;
+        let scene = scene::load_scene_with(path, &options.defines)?;
         results.push(bench_scene(path, &scene, options, progress)?);
     }
     Ok(BenchReport {

@@ -94,6 +94,8 @@ pub struct BenchOptions {
     pub render: RenderOverrides,
     /// Embree build quality and robust mode (the triangle test comes from each scene).
     pub accel_options: AccelOptions,
+    /// `-D name=value` parameters of Mitsuba scenes.
+    pub defines: Vec<(String, String)>,
 }
 
 impl Default for BenchOptions {
@@ -105,6 +107,7 @@ impl Default for BenchOptions {
             repeats: DEFAULT_REPEATS,
             render: RenderOverrides::default(),
             accel_options: AccelOptions::default(),
+            defines: Vec::new(),
         }
     }
 }

@@ -74,6 +74,25 @@ pub enum QualityArg {
     High,
 }
 
+/// `-D name=value`: parameters of a Mitsuba scene (its `$name`), as
+/// Mitsuba's own `-D`; they take precedence over the file's `<default>`s.
+#[derive(Args, Clone, Default)]
+pub struct DefineArgs {
+    /// Set the Mitsuba scene parameter NAME (`$NAME` in the file) to VALUE.
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub defines: Vec<(String, String)>,
+}
+
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: expected NAME=VALUE"))?;
+    if !caustic::scene::mitsuba::xml::is_identifier(name) {
+        return Err(format!("`{name}` is not a parameter name (letters, digits and _)"));
+    }
+    Ok((name.to_string(), value.to_string()))
+}
+
 /// Accelerator selection, shared by the subcommands.
 #[derive(Args)]
 pub struct AccelArgs {
@@ -149,8 +168,10 @@ impl BackendArgs {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// PNG output (tone mapped). Default: <scene name>.png unless --exr alone is given.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -274,8 +295,10 @@ pub struct RenderArgs {
 
 #[derive(Args)]
 pub struct PhotonsArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// The photon file to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -360,8 +383,10 @@ pub enum DebugView {
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// Light transport algorithm shown in the plan (default: the scene's).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
@@ -371,8 +396,10 @@ pub struct InfoArgs {
 
 #[derive(Args)]
 pub struct CrosscheckArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// Number of rays (a quarter each: camera, through the bounds, at mesh vertices and edges, shadow).
     #[arg(long, default_value_t = 1_000_000)]
     pub rays: u64,
@@ -457,8 +484,10 @@ pub enum GatherArg {
 
 #[derive(Args)]
 pub struct ConvergeArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// Reference image: a linear EXR of the same resolution (e.g. from
     /// `caustic render SCENE --spp 256 --photons 10000000 --seed 7 --exr ref.exr`).
     #[arg(long)]
@@ -565,6 +594,8 @@ pub struct ConvergeArgs {
 pub struct BenchArgs {
     /// Scene files (TOML). Default: scenes/dragon.toml and scenes/dragon-mesh.toml (the mesh alone).
     pub scenes: Vec<PathBuf>,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     /// Also write the report as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -623,8 +654,10 @@ pub const DEFAULT_A: &str = "brute";
 /// `caustic view`.
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene file (TOML).
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
     #[command(flatten)]
     pub accel: AccelArgs,
     /// Image width (default 960).

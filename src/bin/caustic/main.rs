@@ -105,8 +105,8 @@ fn main() -> ExitCode {
     }
 }
 
-fn load(path: &Path) -> Result<Scene, Failure> {
-    scene::load_scene(path).map_err(bad_input)
+fn load(path: &Path, defines: &args::DefineArgs) -> Result<Scene, Failure> {
+    scene::load_scene_with(path, &defines.defines).map_err(bad_input)
 }
 
 /// A job's error with the exit code its kind calls for.

@@ -13,7 +13,7 @@ use caustic::scene::{self, IntegratorKind};
 use std::time::Instant;
 
 pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
-    let mut scene = load(&args.scene)?;
+    let mut scene = load(&args.scene, &args.defines)?;
     args.accel.apply(&mut scene);
     if let Some(i) = args.integrator {
         scene.settings.integrator = i.into();
@@ -115,7 +115,7 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
 
 pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
     use caustic::analysis::crosscheck::{compare_one, crosscheck, parse_ray, CrosscheckOptions};
-    let mut scene = load(&args.scene)?;
+    let mut scene = load(&args.scene, &args.defines)?;
     args.accel.apply(&mut scene);
     let options = args.accel.options(&scene);
     let a = accel::build(&scene, args.a.into(), &options)?;
@@ -160,7 +160,7 @@ pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
 
 pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     use caustic::analysis::converge::{self, ConvergeOptions, CurveSpec};
-    let mut scene = load(&args.scene)?;
+    let mut scene = load(&args.scene, &args.defines)?;
     Overrides {
         width: args.width,
         height: args.height,
@@ -331,6 +331,7 @@ pub fn run_bench(args: BenchArgs) -> Result<(), Failure> {
             embree_quality: args.backend.embree_quality.name().into(),
             embree_robust: args.backend.embree_robust,
         },
+        defines: args.defines.defines.clone(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))

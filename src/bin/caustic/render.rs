@@ -49,6 +49,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
             denoise: args.denoise.then_some(true),
             denoise_quality: args.denoise_quality.map(Into::into),
             caustics: args.caustics.map(Into::into),
+            defines: args.defines.defines.clone(),
         },
         accel: args.accel.accel.map(AccelKind::from),
         embree_quality: args.accel.backend.embree_quality.name().into(),
@@ -167,6 +168,7 @@ pub fn run_photons(args: PhotonsArgs) -> Result<(), Failure> {
             photons: args.photons,
             triangle_test: args.accel.backend.triangle_test(),
             integrator: args.integrator.map(Into::into),
+            defines: args.defines.defines.clone(),
             ..Overrides::default()
         },
         accel: args.accel.accel.map(AccelKind::from),

@@ -6,7 +6,7 @@ use caustic::view::{latency, DEFAULT_SIZE};
 
 pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
     // A bad scene is refused before any window opens.
-    let mut scene = load(&args.scene)?;
+    let mut scene = load(&args.scene, &args.defines)?;
     args.accel.apply(&mut scene);
     let size = (
         args.width.unwrap_or(DEFAULT_SIZE.0),

@@ -255,6 +255,7 @@ impl Ctx<'_> {
             conductor,
             coating,
             emission,
+            one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
         })
     }
 

@@ -1,6 +1,6 @@
 //! Scene description to validated scene.
 //!
-//! [`load_scene`] reads a TOML file (bounded in size), [`parse_scene`] parses
+//! [`load_toml_scene`] reads a TOML file (bounded in size), [`parse_scene`] parses
 //! it into a [`SceneDesc`] (serde, every table `deny_unknown_fields`) and then
 //! checks every value before building the immutable [`Scene`]. Every error is
 //! a [`SceneError`] whose message starts with `file:line:column:` when the
@@ -46,7 +46,13 @@ pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
 /// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
 /// Relative mesh paths are resolved against the scene file's directory.
-pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+pub fn load_toml_scene(path: &Path) -> Result<Scene, SceneError> {
+    let text = read_scene_text(path)?;
+    parse_scene(&text, path)
+}
+
+/// The text of a scene file: at most [`MAX_SCENE_FILE_BYTES`], UTF-8.
+pub(crate) fn read_scene_text(path: &Path) -> Result<String, SceneError> {
     let read_error = |error| SceneError::Read {
         path: path.into(),
         error,
@@ -66,15 +72,14 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             limit: MAX_SCENE_FILE_BYTES,
         });
     }
-    let text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         let valid = e.utf8_error().valid_up_to();
         let text = std::str::from_utf8(&e.as_bytes()[..valid]).unwrap_or_default();
         SceneError::NotUtf8 {
             path: path.into(),
             place: Place::of_offset(text, valid),
         }
-    })?;
-    parse_scene(&text, path)
+    })
 }
 
 /// Parses and validates scene text. `path` names the file in messages, and

@@ -1,0 +1,260 @@
+//! `<bsdf>`: each plugin as the caustic material that scatters the same,
+//! or refused. Mitsuba's BSDFs are one-sided (black from behind) unless
+//! wrapped in `twosided`.
+
+use super::props::Plugin;
+use super::spectrum::SpectrumUse;
+use super::Builder;
+use crate::math::Vec3A;
+use crate::scene::conductors::CONDUCTORS;
+use crate::scene::ior::{ior_names, named_ior};
+use crate::scene::load::SceneError;
+use crate::scene::{Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, NormalMap, ShadingModel};
+
+/// Mitsuba's default interior index of dielectrics (BK7).
+const BK7: f32 = 1.5046;
+/// Mitsuba's default exterior index (air).
+const AIR: f32 = 1.000277;
+/// Mitsuba's default interior index of plastics (polypropylene).
+const POLYPROPYLENE: f32 = 1.49;
+
+/// A material scattering nothing yet: the base every plugin fills.
+fn blank(name: String) -> Material {
+    Material {
+        name,
+        model: ShadingModel::BlinnPhong,
+        ambient: Vec3A::ZERO,
+        diffuse: Vec3A::ZERO,
+        specular: Vec3A::ZERO,
+        shininess: 1.0,
+        mirror: None,
+        dielectric: None,
+        conductor: None,
+        coating: None,
+        emission: Vec3A::ZERO,
+        one_sided: true,
+        textures: None,
+    }
+}
+
+impl Builder<'_> {
+    /// The material of a `<bsdf>`.
+    pub(super) fn bsdf(&self, p: &Plugin) -> Result<Material, SceneError> {
+        let name = p
+            .element
+            .attr("id")
+            .map_or_else(|| format!("{}@{}", p.kind, p.origin().place), str::to_string);
+        let mut m = blank(name);
+        let mut textures = MaterialTextures::default();
+        match p.kind {
+            "diffuse" => {
+                let (c, t) = self.colour(p, "reflectance", Vec3A::splat(0.5), SpectrumUse::Reflectance)?;
+                m.diffuse = c;
+                textures.diffuse = t;
+            }
+            "dielectric" | "roughdielectric" => {
+                let eta = interior_over_exterior(p, BK7)?;
+                unit_reflectance(p)?;
+                let (tint, tint_texture) =
+                    self.colour(p, "specular_transmittance", Vec3A::ONE, SpectrumUse::Reflectance)?;
+                textures.dielectric_tint = tint_texture;
+                let roughness = if p.kind == "roughdielectric" {
+                    let (alpha, alpha_texture) = self.roughness(p)?;
+                    textures.dielectric_roughness = alpha_texture;
+                    alpha
+                } else {
+                    0.0
+                };
+                m.dielectric = Some(Dielectric {
+                    ior: eta,
+                    tint,
+                    roughness,
+                    fresnel: Some(FresnelModel::Exact),
+                });
+                m.one_sided = false;
+            }
+            "conductor" | "roughconductor" => {
+                let (eta, k) = conductor_ior(self, p)?;
+                unit_reflectance(p)?;
+                let roughness = if p.kind == "roughconductor" {
+                    let (alpha, alpha_texture) = self.roughness(p)?;
+                    textures.conductor_roughness = alpha_texture;
+                    alpha
+                } else {
+                    0.0
+                };
+                m.conductor = Some(Conductor { eta, k, roughness });
+            }
+            "plastic" => {
+                let (c, t) = self.colour(p, "diffuse_reflectance", Vec3A::splat(0.5), SpectrumUse::Reflectance)?;
+                m.diffuse = c;
+                textures.diffuse = t;
+                unit_reflectance(p)?;
+                if p.boolean("nonlinear")?.unwrap_or(false) {
+                    return Err(p.error("`nonlinear` = true is not supported (caustic's plastic is Mitsuba's linear one)"));
+                }
+                m.coating = Some(Coating {
+                    ior: interior_over_exterior(p, POLYPROPYLENE)?,
+                });
+            }
+            "twosided" => {
+                let inner = p.children_of("bsdf")?;
+                let [(inner, _)] = <[_; 1]>::try_from(inner).map_err(|v: Vec<_>| {
+                    p.error(format!(
+                        "takes one nested <bsdf> (a different BSDF per side is not supported), not {}",
+                        v.len()
+                    ))
+                })?;
+                let mut m = self.bsdf(&inner)?;
+                m.one_sided = false;
+                if let Some(id) = p.element.attr("id") {
+                    m.name = id.to_string();
+                }
+                p.finish()?;
+                return Ok(m);
+            }
+            "normalmap" => {
+                let map = p
+                    .child_named("normalmap")?
+                    .ok_or_else(|| p.error("needs a <texture name=\"normalmap\">"))?;
+                let map = self.texture(&map)?;
+                let inner = p
+                    .single_child("bsdf")?
+                    .ok_or_else(|| p.error("needs a nested <bsdf>"))?;
+                let mut m = self.bsdf(&inner)?;
+                if m.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) {
+                    return Err(p.error("nested normal maps are not supported"));
+                }
+                m.textures.get_or_insert_with(Default::default).normal_map =
+                    Some(NormalMap { texture: map, scale: 1.0 });
+                if let Some(id) = p.element.attr("id") {
+                    m.name = id.to_string();
+                }
+                p.finish()?;
+                return Ok(m);
+            }
+            other => {
+                return Err(p.error(format!(
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric (ggx), conductor, roughconductor (ggx), plastic, twosided and normalmap"
+                )))
+            }
+        }
+        p.finish()?;
+        if textures.has_any() {
+            m.textures = Some(Box::new(textures));
+        }
+        Ok(m)
+    }
+
+    /// The GGX `alpha` of a rough plugin (isotropic).
+    fn roughness(&self, p: &Plugin) -> Result<(f32, Option<crate::texture::Texture>), SceneError> {
+        let distribution = p.string("distribution")?.unwrap_or("beckmann");
+        if distribution != "ggx" {
+            let at = p.take("distribution").map_or(p.origin(), |e| &e.origin);
+            return Err(at.error(format!(
+                "{}: the `{distribution}` microfacet distribution{} is not supported; caustic's rough surfaces are GGX (`<string name=\"distribution\" value=\"ggx\"/>`)",
+                p.what(),
+                if p.has("distribution") { "" } else { " (Mitsuba's default)" }
+            )));
+        }
+        // Visible-normal sampling or not: the same BSDF, another sampling.
+        p.boolean("sample_visible")?;
+        if p.has("alpha_u") || p.has("alpha_v") {
+            if p.has("alpha") {
+                return Err(p.error("give `alpha` or `alpha_u` and `alpha_v`, not both"));
+            }
+            let (u, tu) = self.scalar(p, "alpha_u", 0.1)?;
+            let (v, tv) = self.scalar(p, "alpha_v", 0.1)?;
+            if u != v || tu != tv {
+                return Err(p.error("anisotropic roughness (`alpha_u` ≠ `alpha_v`) is not supported"));
+            }
+            check_alpha(p, u)?;
+            return Ok((u, tu));
+        }
+        let (alpha, texture) = self.scalar(p, "alpha", 0.1)?;
+        check_alpha(p, alpha)?;
+        Ok((alpha, texture))
+    }
+}
+
+fn check_alpha(p: &Plugin, alpha: f32) -> Result<(), SceneError> {
+    if alpha >= 0.0 {
+        Ok(())
+    } else {
+        Err(p.error(format!("the roughness `alpha` = {alpha} must be ≥ 0")))
+    }
+}
+
+/// Refuses a `specular_reflectance` other than 1 (caustic's lobes have no
+/// such factor).
+fn unit_reflectance(p: &Plugin) -> Result<(), SceneError> {
+    match p.colour("specular_reflectance", SpectrumUse::Reflectance)? {
+        None => Ok(()),
+        Some(super::props::ColourParam::Value(c)) if c == Vec3A::ONE => Ok(()),
+        Some(_) => Err(p.error("a `specular_reflectance` other than 1 is not supported")),
+    }
+}
+
+/// An index given as a number or one of Mitsuba's names.
+fn ior(p: &Plugin, name: &str, default: f32) -> Result<f32, SceneError> {
+    let Some(e) = p.take(name) else { return Ok(default) };
+    let value = e.attr("value").unwrap_or("");
+    let v = match e.tag.as_str() {
+        "string" => named_ior(value).ok_or_else(|| {
+            e.origin.error(format!(
+                "`{name}` = `{value}` is not a known index; the names are: {}",
+                ior_names()
+            ))
+        })?,
+        _ => p.float(name)?.unwrap_or(default),
+    };
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(e.origin.error(format!("`{name}` = {v} must be > 0")))
+    }
+}
+
+/// `int_ior / ext_ior`.
+fn interior_over_exterior(p: &Plugin, interior: f32) -> Result<f32, SceneError> {
+    let eta = ior(p, "int_ior", interior)? / ior(p, "ext_ior", AIR)?;
+    if eta == 1.0 {
+        return Err(p.error("`int_ior` equals `ext_ior`: the surface is invisible (use a `null` BSDF)"));
+    }
+    Ok(eta)
+}
+
+/// A conductor's `(eta, k)`: a named `material` or explicit values, over
+/// `ext_eta`.
+fn conductor_ior(b: &Builder, p: &Plugin) -> Result<(Vec3A, Vec3A), SceneError> {
+    let explicit = p.has("eta") || p.has("k");
+    let (eta, k) = if explicit {
+        if p.has("material") {
+            return Err(p.error("give `material` or `eta` and `k`, not both"));
+        }
+        let (eta, t1) = b.colour(p, "eta", Vec3A::ZERO, SpectrumUse::Unbounded)?;
+        let (k, t2) = b.colour(p, "k", Vec3A::ONE, SpectrumUse::Unbounded)?;
+        if t1.is_some() || t2.is_some() {
+            return Err(p.error("textured `eta` or `k` is not supported"));
+        }
+        (eta, k)
+    } else {
+        match p.string("material")?.unwrap_or("none") {
+            // A perfect mirror: |r| = 1 at every angle for η = 0 + 1i.
+            "none" => (Vec3A::ZERO, Vec3A::ONE),
+            name => {
+                let (_, eta, k) = CONDUCTORS.iter().find(|(n, _, _)| *n == name).ok_or_else(|| {
+                    let names: Vec<&str> = CONDUCTORS.iter().map(|(n, _, _)| *n).collect();
+                    let at = p.take("material").map_or(p.origin(), |e| &e.origin);
+                    at.error(format!(
+                        "`material` = `{name}` is not one of Mitsuba's conductors: none, {}",
+                        names.join(", ")
+                    ))
+                })?;
+                (Vec3A::from_array(*eta), Vec3A::from_array(*k))
+            }
+        }
+    };
+    let ext = ior(p, "ext_eta", 1.0)?;
+    Ok((eta / ext, k / ext))
+}

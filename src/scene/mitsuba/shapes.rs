@@ -1,0 +1,283 @@
+//! `<shape>`: obj, ply, serialized, rectangle, cube and sphere, each with
+//! its BSDF (Mitsuba's default: a one-sided diffuse of reflectance 0.5) and
+//! a nested `area` emitter, which makes the shape emit and still reflect.
+
+use super::emitters::affine;
+use super::props::Plugin;
+use super::spectrum::SpectrumUse;
+use super::xml::{resolve, Origin};
+use super::{Builder, MeshSource};
+use crate::geometry::Mesh;
+use crate::math::{Transform, Vec2, Vec3, Vec3A};
+use crate::scene::load::SceneError;
+use crate::scene::{Material, Object, Quad, Shape, Sphere};
+use glam::{Affine3A, Mat4};
+
+/// Mitsuba's `cube`: 24 vertices (4 per face, with the face's normal and
+/// UVs) and 12 triangles over [−1, 1]³, as `mi.traverse` lists them.
+const CUBE_POSITIONS: [[f32; 3]; 24] = [
+    [1., -1., -1.],
+    [1., -1., 1.],
+    [-1., -1., 1.],
+    [-1., -1., -1.],
+    [1., 1., -1.],
+    [-1., 1., -1.],
+    [-1., 1., 1.],
+    [1., 1., 1.],
+    [1., -1., -1.],
+    [1., 1., -1.],
+    [1., 1., 1.],
+    [1., -1., 1.],
+    [1., -1., 1.],
+    [1., 1., 1.],
+    [-1., 1., 1.],
+    [-1., -1., 1.],
+    [-1., -1., 1.],
+    [-1., 1., 1.],
+    [-1., 1., -1.],
+    [-1., -1., -1.],
+    [1., 1., -1.],
+    [1., -1., -1.],
+    [-1., -1., -1.],
+    [-1., 1., -1.],
+];
+const CUBE_NORMALS: [[f32; 3]; 6] = [
+    [0., -1., 0.],
+    [0., 1., 0.],
+    [1., 0., 0.],
+    [0., 0., 1.],
+    [-1., 0., 0.],
+    [0., 0., -1.],
+];
+const CUBE_UVS: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
+
+impl Builder<'_> {
+    /// Adds a `<shape>`'s object.
+    pub(super) fn shape(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        if !p.children_of("medium")?.is_empty() {
+            return Err(p.error("participating media (`interior` / `exterior`) are not supported yet"));
+        }
+        let material = self.shape_material(p)?;
+        let name = p
+            .element
+            .attr("id")
+            .map_or_else(|| format!("{}@{}", p.kind, p.origin().place), str::to_string);
+        let flip_normals = p.boolean("flip_normals")?.unwrap_or(false);
+        let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let shape = match p.kind {
+            "obj" | "ply" | "serialized" => {
+                let file = p.string("filename")?.ok_or_else(|| p.error("`filename` is required"))?;
+                let at = p.take("filename").map_or(p.origin(), |e| &e.origin).clone();
+                let face_normals = p.boolean("face_normals")?.unwrap_or(false);
+                // Mitsuba orients face normals by the world-space winding, which
+                // a mirroring `to_world` reverses; caustic transforms the object's.
+                let mirrored = to_world.determinant() < 0.0;
+                let flip_normals = flip_normals != (face_normals && mirrored);
+                let shape_index = match p.kind {
+                    "serialized" => {
+                        let i = p.int("shape_index")?.unwrap_or(0);
+                        u32::try_from(i).map_err(|_| p.error(format!("`shape_index` = {i} must be ≥ 0")))?
+                    }
+                    _ => 0,
+                };
+                let flip_v = match p.kind {
+                    // caustic's OBJ reader already flips v, as Mitsuba does by default.
+                    "obj" => !p.boolean("flip_tex_coords")?.unwrap_or(true),
+                    _ => false,
+                };
+                if p.kind == "ply" && p.has("flip_tex_coords") {
+                    return Err(p.error("`flip_tex_coords` is an OBJ parameter"));
+                }
+                let path = resolve(file, at_dir(&at), &self.doc.search_path);
+                let mesh = self.mesh_file(MeshSource::File {
+                    path,
+                    serialized: (p.kind == "serialized").then_some(shape_index),
+                    flip_normals,
+                    flip_v,
+                    origin: at,
+                    object: name.clone(),
+                });
+                Shape::Mesh {
+                    mesh,
+                    transform: self.transform(p, &to_world)?,
+                    smooth: !face_normals,
+                }
+            }
+            "rectangle" => {
+                let m = affine(p, &to_world)?;
+                let corner = m.transform_point3(Vec3::new(-1.0, -1.0, 0.0));
+                let (u, v) = (m.transform_vector3(Vec3::X * 2.0), m.transform_vector3(Vec3::Y * 2.0));
+                // Mitsuba's front is the transformed +z normal: u × v unless
+                // the transform mirrors or the normals are flipped.
+                let mirrored = m.matrix3.determinant() < 0.0;
+                if mirrored != flip_normals {
+                    let mesh = quad_mesh(flip_normals);
+                    Shape::Mesh {
+                        mesh: self.mesh_ready(mesh),
+                        transform: self.transform(p, &to_world)?,
+                        smooth: false,
+                    }
+                } else {
+                    Shape::Quad(
+                        Quad::new(corner.into(), u.into(), v.into())
+                            .ok_or_else(|| p.error("`to_world` flattens the rectangle to a line"))?,
+                    )
+                }
+            }
+            "cube" => {
+                let positions = CUBE_POSITIONS.iter().map(|p| Vec3::from_array(*p)).collect();
+                let normals = (0..24).map(|i| Vec3::from_array(CUBE_NORMALS[i / 4])).collect();
+                let triangles = (0..6u32)
+                    .flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f + 3, 4 * f, 4 * f + 2]])
+                    .collect();
+                let uvs = (0..24).map(|i| Vec2::from_array(CUBE_UVS[i % 4])).collect();
+                let mesh = Mesh::new("cube", positions, triangles, Some(normals))
+                    .and_then(|m| m.with_uvs(uvs))
+                    .expect("the cube is a valid mesh");
+                let mesh = if flip_normals { flipped(mesh) } else { mesh };
+                Shape::Mesh {
+                    mesh: self.mesh_ready(mesh),
+                    transform: self.transform(p, &to_world)?,
+                    smooth: false,
+                }
+            }
+            "sphere" => {
+                if flip_normals {
+                    return Err(p.error("`flip_normals` on a sphere is not supported"));
+                }
+                let center = p.vector("center")?.unwrap_or(Vec3::ZERO);
+                let radius = p.float_checked("radius", 1.0, "> 0", |r| r > 0.0)?;
+                let m = affine(p, &to_world)?
+                    * Affine3A::from_translation(center)
+                    * Affine3A::from_scale(Vec3::splat(radius));
+                let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+                let r = axes[0].length();
+                let round = axes.iter().all(|a| (a.length() - r).abs() <= 1e-4 * r)
+                    && axes[0].dot(axes[1]).abs() <= 1e-4 * r * r
+                    && axes[1].dot(axes[2]).abs() <= 1e-4 * r * r
+                    && axes[0].dot(axes[2]).abs() <= 1e-4 * r * r;
+                if !round || r <= 0.0 {
+                    return Err(p.error("`to_world` scales the sphere unevenly (an ellipsoid is not supported)"));
+                }
+                let rotated = (axes[0] / r - Vec3A::X).length() > 1e-5
+                    || (axes[2] / r - Vec3A::Z).length() > 1e-5;
+                if rotated
+                    && self.materials[material as usize]
+                        .textures
+                        .as_ref()
+                        .is_some_and(|t| t.uses_uv())
+                {
+                    return Err(p.error(
+                        "a textured sphere whose `to_world` rotates it is not supported (caustic's sphere UVs follow the world axes)",
+                    ));
+                }
+                Shape::Sphere(Sphere {
+                    center: m.translation,
+                    radius: r,
+                })
+            }
+            "disk" | "cylinder" | "shapegroup" | "instance" | "bsplinecurve" | "linearcurve" | "sdfgrid" => {
+                return Err(p.error(format!("the shape `{}` is not supported yet", p.kind)))
+            }
+            other => return Err(p.error(format!("the shape `{other}` is unknown"))),
+        };
+        p.finish()?;
+        self.objects.push(Object { name, shape, material });
+        Ok(())
+    }
+
+    /// The material of a shape: its BSDF (or Mitsuba's default) and the
+    /// emission of a nested `area` emitter, one material per combination.
+    fn shape_material(&mut self, p: &Plugin) -> Result<u32, SceneError> {
+        let bsdf = p.single_child("bsdf")?;
+        let emitters = p.children_of("emitter")?;
+        if emitters.len() > 1 {
+            return Err(emitters[1].1.origin.error("a shape takes at most one emitter"));
+        }
+        let key = (
+            bsdf.as_ref().map_or(0, |b| b.element as *const _ as usize),
+            emitters.first().map_or(0, |(e, _)| e.element as *const _ as usize),
+        );
+        if let Some(&index) = self.material_index.get(&key) {
+            // The same definitions give the same material (read and checked once).
+            return Ok(index);
+        }
+        let mut material = match &bsdf {
+            Some(b) => self.bsdf(b)?,
+            None => {
+                let mut m = Material::diffuse("default", Vec3A::splat(0.5));
+                m.ambient = Vec3A::ZERO;
+                m.one_sided = true;
+                m
+            }
+        };
+        if let Some((e, _)) = emitters.first() {
+            if e.kind != "area" {
+                return Err(e.error("only an `area` emitter can be attached to a shape"));
+            }
+            let (radiance, texture) = self.colour(e, "radiance", Vec3A::ONE, SpectrumUse::Emission)?;
+            e.finish()?;
+            if texture.is_some() {
+                material.emission = Vec3A::ONE;
+                material.textures.get_or_insert_with(Default::default).emission = texture;
+            } else {
+                material.emission = radiance;
+            }
+            material.name = format!("{}+{}", material.name, e.element.attr("id").unwrap_or("area"));
+        }
+        let index = self.materials.len() as u32;
+        self.materials.push(material);
+        self.material_index.insert(key, index);
+        Ok(index)
+    }
+
+    fn transform(&self, p: &Plugin, m: &Mat4) -> Result<Transform, SceneError> {
+        Transform::from_affine(affine(p, m)?).ok_or_else(|| p.error("`to_world` is singular"))
+    }
+}
+
+fn at_dir(origin: &Origin) -> &std::path::Path {
+    origin.file.parent().unwrap_or(std::path::Path::new(""))
+}
+
+/// The rectangle [−1, 1]² as two triangles with Mitsuba's UVs, facing −z
+/// in object space when `flip`, else +z.
+fn quad_mesh(flip: bool) -> Mesh {
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let uvs = vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 1.0),
+    ];
+    let mesh = Mesh::new(
+        "rectangle",
+        positions,
+        vec![[0, 1, 2], [0, 2, 3]],
+        Some(vec![Vec3::Z; 4]),
+    )
+    .and_then(|m| m.with_uvs(uvs))
+    .expect("the rectangle is a valid mesh");
+    if flip {
+        flipped(mesh)
+    } else {
+        mesh
+    }
+}
+
+/// `mesh` turned inside out: triangles wound the other way, normals negated
+/// (Mitsuba's `flip_normals`).
+pub(super) fn flipped(mut mesh: Mesh) -> Mesh {
+    for t in &mut mesh.triangles {
+        t.swap(1, 2);
+    }
+    for n in &mut mesh.normals {
+        *n = -*n;
+    }
+    mesh
+}
