@@ -13,7 +13,17 @@ use caustic::scene::{self, IntegratorKind};
 use std::time::Instant;
 
 pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
-    let mut scene = load(&args.scene, &args.defines)?;
+    let mut load_times = None;
+    let mut scene = if scene::mitsuba::is_mitsuba_path(&args.scene) {
+        let loaded = scene::mitsuba::load_mitsuba_scene(&args.scene, &args.defines.defines).map_err(bad_input)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        load_times = Some((loaded.xml_seconds, loaded.mesh_seconds));
+        loaded.scene
+    } else {
+        load(&args.scene, &args.defines)?
+    };
     args.accel.apply(&mut scene);
     if let Some(i) = args.integrator {
         scene.settings.integrator = i.into();
@@ -22,6 +32,9 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
     let distinct: u64 = scene.meshes.iter().map(|m| m.triangles.len() as u64).sum();
     let b = scene.bounds();
     println!("scene       {}", args.scene.display());
+    if let Some((xml, meshes)) = load_times {
+        println!("loaded      Mitsuba XML read and built in {xml:.4} s, mesh files in {meshes:.4} s");
+    }
     let depth = match (st.max_depth, st.integrator) {
         (Some(d), _) => d.to_string(),
         (None, IntegratorKind::Whitted) => st.whitted_depth().to_string(),

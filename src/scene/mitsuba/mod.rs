@@ -43,11 +43,16 @@ pub struct MitsubaScene {
     /// Messages about what caustic reads but does not render (output-only
     /// integrator wrappers).
     pub warnings: Vec<String>,
+    /// Seconds spent reading the XML and building the scene, mesh files aside.
+    pub xml_seconds: f64,
+    /// Seconds spent loading the mesh files (in parallel).
+    pub mesh_seconds: f64,
 }
 
 /// Reads a Mitsuba XML scene; `defines` are `-D name=value` parameters,
 /// which take precedence over the file's `<default>`s.
 pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<MitsubaScene, SceneError> {
+    let start = std::time::Instant::now();
     let doc = xml::read_document(path, defines)?;
     let ids = Ids::collect(&doc.root)?;
     let mut b = Builder {
@@ -122,7 +127,9 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     settings.height = sensor.size.1;
     settings.spp = sensor.spp;
     settings.seed = sensor.seed;
+    let meshes_start = std::time::Instant::now();
     let meshes = b.load_meshes()?;
+    let mesh_seconds = meshes_start.elapsed().as_secs_f64();
     let Builder {
         materials, mut objects, ..
     } = b;
@@ -168,7 +175,12 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
             )));
         }
     }
-    Ok(MitsubaScene { scene, warnings })
+    Ok(MitsubaScene {
+        scene,
+        warnings,
+        xml_seconds: start.elapsed().as_secs_f64() - mesh_seconds,
+        mesh_seconds,
+    })
 }
 
 /// Where a mesh comes from.

@@ -159,8 +159,7 @@ impl Builder<'_> {
                 if !round || r <= 0.0 {
                     return Err(p.error("`to_world` scales the sphere unevenly (an ellipsoid is not supported)"));
                 }
-                let rotated = (axes[0] / r - Vec3A::X).length() > 1e-5
-                    || (axes[2] / r - Vec3A::Z).length() > 1e-5;
+                let rotated = (axes[0] / r - Vec3A::X).length() > 1e-5 || (axes[2] / r - Vec3A::Z).length() > 1e-5;
                 if rotated
                     && self.materials[material as usize]
                         .textures
