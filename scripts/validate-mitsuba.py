@@ -340,6 +340,18 @@ def noise_relmse(ours, theirs, ref):
     return float(np.mean(var / (ref ** 2 + EPSILON)))
 
 
+def agreement_columns(row, r, theirs, ours_h, theirs_h, halves):
+    """The noise relMSE and mean ratios (± standard errors with `halves`),
+    added to `row` and returned as the line's last columns."""
+    if not halves:
+        return f"  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}"
+    whole = (slice(None), slice(None))
+    row["noise_relmse"] = noise_relmse(ours_h, theirs_h, theirs)
+    row["mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, whole)
+    return f" {row['noise_relmse']:>10.3e}  " + " ".join(
+        f"{v:.4f}±{s:.4f}" for v, s in zip(r, row["mean_ratio_error"]))
+
+
 def save_exr(path, img):
     mi.Bitmap(img.astype(np.float32)).write(path)
 
@@ -413,14 +425,7 @@ def main():
                        "relmse": e, "mean_ratio": r}
                 line = (f"{name:<10} {mode:>8} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} "
                         f"{t_theirs:>7.1f} {e:>10.3e}")
-                whole = (slice(None), slice(None))
-                if args.halves:
-                    row["noise_relmse"] = noise_relmse(ours_h, theirs_h, theirs)
-                    row["mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, whole)
-                    line += f" {row['noise_relmse']:>10.3e}  " + " ".join(
-                        f"{v:.4f}±{s:.4f}" for v, s in zip(r, row["mean_ratio_error"]))
-                else:
-                    line += f"  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}"
+                line += agreement_columns(row, r, theirs, ours_h, theirs_h, args.halves)
                 if window:
                     rr = mean_ratio(ours[window], theirs[window])
                     row["region"] = [x0, y0, x1, y1]
@@ -488,14 +493,7 @@ def xml_scenes(binary, args):
                "relmse": e, "mean_ratio": r}
         line = (f"{name:<40} {args.spp_caustic:>11} {t_ours:>7.1f} {args.spp_mitsuba:>11} {t_theirs:>7.1f} "
                 f"{e:>10.3e}")
-        if args.halves:
-            whole = (slice(None), slice(None))
-            row["noise_relmse"] = noise_relmse(ours_h, theirs_h, theirs)
-            row["mean_ratio_error"] = mean_ratio_error(ours_h, theirs_h, whole)
-            line += f" {row['noise_relmse']:>10.3e}  " + " ".join(
-                f"{v:.4f}±{s:.4f}" for v, s in zip(r, row["mean_ratio_error"]))
-        else:
-            line += f"  {r[0]:.4f} {r[1]:.4f} {r[2]:.4f}"
+        line += agreement_columns(row, r, theirs, ours_h, theirs_h, args.halves)
         if ref_path:
             ref = np.array(mi.Bitmap(ref_path), dtype=np.float64)[:, :, :3]
             row["reference"] = ref_path

@@ -7,7 +7,7 @@
 use caustic::bsdf::{Bsdf, FresnelModel, Transport};
 use caustic::math::rng::Domain;
 use caustic::math::{Rng, Vec3A};
-use caustic::scene::{Coating, Conductor, Dielectric, Material, Mirror, ShadingModel};
+use caustic::scene::{Coating, Conductor, Dielectric, Material, MicrofacetDistribution, Mirror, ShadingModel};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f32::consts::PI;
 
@@ -138,6 +138,11 @@ fn glass(roughness: f32) -> Material {
     m
 }
 
+fn beckmann(mut m: Material) -> Material {
+    m.microfacet = MicrofacetDistribution::Beckmann;
+    m
+}
+
 fn plastic(albedo: f32) -> Material {
     let mut m = Material::diffuse("plastic", Vec3A::new(albedo, 0.5 * albedo, 0.2));
     m.coating = Some(Coating { ior: 1.5 });
@@ -177,6 +182,8 @@ fn microfacet_lobes_sample_their_density() {
     for wo in outgoing() {
         chi2("rough gold 0.3", &bsdf(&gold(0.3)), wo);
         chi2("rough gold 0.6", &bsdf(&gold(0.6)), wo);
+        chi2("beckmann gold 0.3", &bsdf(&beckmann(gold(0.3))), wo);
+        chi2("beckmann gold 0.6", &bsdf(&beckmann(gold(0.6))), wo);
         chi2("plastic", &bsdf(&plastic(0.8)), wo);
     }
     // Rough glass from outside and from inside (transmission included).
@@ -188,6 +195,8 @@ fn microfacet_lobes_sample_their_density() {
     ] {
         chi2("rough glass 0.3", &bsdf(&glass(0.3)), wo);
         chi2("rough glass 0.6", &bsdf(&glass(0.6)), wo);
+        chi2("beckmann glass 0.3", &bsdf(&beckmann(glass(0.3))), wo);
+        chi2("beckmann glass 0.6", &bsdf(&beckmann(glass(0.6))), wo);
     }
 }
 
@@ -198,6 +207,8 @@ fn reflection_is_reciprocal() {
         report(0.4, 0.5, 20.0, ShadingModel::Phong),
         report(0.3, 0.6, 40.0, ShadingModel::BlinnPhong),
         gold(0.3),
+        beckmann(gold(0.3)),
+        beckmann(glass(0.4)),
         plastic(0.7),
         glass(0.4),
     ];
@@ -249,6 +260,7 @@ fn no_bsdf_reflects_more_than_it_receives() {
         ("blinn 0.3+0.7 n=200", report(0.3, 0.7, 200.0, ShadingModel::BlinnPhong)),
         ("mirror", white_mirror),
         ("rough gold", gold(0.5)),
+        ("beckmann gold", beckmann(gold(0.5))),
         ("plastic white", plastic(1.0)),
     ];
     for (name, m) in &cases {

@@ -244,8 +244,8 @@ fn what_caustic_does_not_read_is_refused_at_its_place() {
             "the BSDF `hair` is not supported",
         ),
         (
-            r#"<shape type="sphere"><bsdf type="roughconductor"/></shape>"#,
-            "(Mitsuba's default)",
+            r#"<shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#,
+            "caustic reads beckmann, ggx",
         ),
         (r#"<shape type="disk"/>"#, "the shape `disk` is not supported"),
         (r#"<emitter type="area"/>"#, "belongs inside a <shape>"),

@@ -552,3 +552,21 @@ fn load_scene_reports_places_too() {
         "{msg}"
     );
 }
+
+#[test]
+fn material_microfacet_and_sides() {
+    expect_error(
+        &format!("{CAMERA}[materials.m]\nmicrofacet = \"phong\"\n"),
+        5,
+        14,
+        "expected ggx or beckmann",
+    );
+    let scene = parse_scene(
+        &format!("{CAMERA}[materials.m]\nmicrofacet = \"beckmann\"\none_sided = true\nconductor = {{ metal = \"gold\", roughness = 0.3 }}\n"),
+        Path::new(FILE),
+    )
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(m.microfacet, caustic::scene::MicrofacetDistribution::Beckmann);
+    assert!(m.one_sided);
+}

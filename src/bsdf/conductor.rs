@@ -5,7 +5,7 @@
 //! of `eta` and `k` are in `scene::metals`.
 
 use super::fresnel;
-use super::microfacet::Ggx;
+use super::microfacet::Microfacet;
 use super::BsdfSample;
 use crate::math::{Vec2, Vec3A};
 
@@ -40,7 +40,7 @@ pub struct RoughConductor {
     /// Extinction coefficient, per channel.
     pub k: Vec3A,
     /// Microfacet distribution.
-    pub ggx: Ggx,
+    pub microfacet: Microfacet,
 }
 
 impl RoughConductor {
@@ -52,7 +52,7 @@ impl RoughConductor {
         if m.z <= 0.0 {
             return Vec3A::ZERO;
         }
-        let dg = self.ggx.d(m) * self.ggx.g(wi, wo, m);
+        let dg = self.microfacet.d(m) * self.microfacet.g(wi, wo, m);
         fresnel::conductor(wo.dot(m), self.eta, self.k) * (dg / (4.0 * wi.z * wo.z))
     }
 
@@ -64,14 +64,14 @@ impl RoughConductor {
         if m.z <= 0.0 || wo.dot(m) <= 0.0 {
             return 0.0;
         }
-        self.ggx.pdf_visible(wo, m) / (4.0 * wo.dot(m))
+        self.microfacet.pdf_normal(wo, m) / (4.0 * wo.dot(m))
     }
 
     pub(super) fn sample(&self, wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
-        let m = self.ggx.sample_visible(wo, u);
+        let m = self.microfacet.sample_normal(wo, u);
         let wi = 2.0 * wo.dot(m) * m - wo;
         if wi.z <= 0.0 {
             return None;

@@ -9,7 +9,7 @@
 //! 1997, §5.2, non-symmetric scattering).
 
 use super::fresnel;
-use super::microfacet::Ggx;
+use super::microfacet::Microfacet;
 use super::{BsdfSample, FresnelModel, Transport};
 use crate::math::{Vec2, Vec3A};
 
@@ -81,7 +81,7 @@ pub struct RoughDielectric {
     /// Colour filter on transmitted light.
     pub tint: Vec3A,
     /// Microfacet distribution.
-    pub ggx: Ggx,
+    pub microfacet: Microfacet,
 }
 
 /// The generalised half vector of `wo` and `wi` (pointing to +z) and the
@@ -117,7 +117,7 @@ impl RoughDielectric {
             return Vec3A::ZERO;
         };
         let f = fresnel::dielectric(wo.dot(wm), self.eta).0;
-        let dg = self.ggx.d(wm) * self.ggx.g(wi, wo, wm);
+        let dg = self.microfacet.d(wm) * self.microfacet.g(wi, wo, wm);
         if reflect {
             return Vec3A::splat(dg * f / (4.0 * wi.z * wo.z).abs());
         }
@@ -134,7 +134,7 @@ impl RoughDielectric {
             return 0.0;
         };
         let r = fresnel::dielectric(wo.dot(wm), self.eta).0;
-        let visible = self.ggx.pdf_visible(wo, wm);
+        let visible = self.microfacet.pdf_normal(wo, wm);
         if reflect {
             visible / (4.0 * wo.dot(wm).abs()) * r
         } else {
@@ -147,7 +147,7 @@ impl RoughDielectric {
         if wo.z == 0.0 {
             return None;
         }
-        let wm = self.ggx.sample_visible(wo, u);
+        let wm = self.microfacet.sample_normal(wo, u);
         let r = fresnel::dielectric(wo.dot(wm), self.eta).0;
         let wi = if uc < r {
             let wi = 2.0 * wo.dot(wm) * wm - wo;

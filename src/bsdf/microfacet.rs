@@ -1,25 +1,39 @@
-//! The GGX (Trowbridge–Reitz) microfacet distribution, isotropic, in the
-//! local shading frame (+z is the macro normal): the distribution of
-//! normals `D`, Smith's masking `G1` (shadowing–masking taken separable,
-//! `G = G1(wi) G1(wo)`, as in Mitsuba 3), and the sampling of the normals
-//! visible from a direction (Heitz 2018, "Sampling the GGX Distribution of
-//! Visible Normals", JCGT 7(4)).
+//! Microfacet distributions, isotropic, in the local shading frame (+z is
+//! the macro normal): GGX (Trowbridge–Reitz) and Beckmann (Walter et al.
+//! 2007, "Microfacet Models for Refraction through Rough Surfaces"). Each
+//! gives the distribution of normals `D`, Smith's masking `G1`
+//! (shadowing–masking taken separable, `G = G1(wi) G1(wo)`, as in Mitsuba
+//! 3), and a sampling of normals: for GGX the normals visible from a
+//! direction (Heitz 2018, "Sampling the GGX Distribution of Visible
+//! Normals", JCGT 7(4)), for Beckmann `D(m) cos θm` (Walter et al. 2007,
+//! eq. 28).
 
 use crate::math::{Vec2, Vec3A};
+pub use crate::scene::MicrofacetDistribution;
 use std::f32::consts::PI;
 
 /// Roughnesses below this are treated as smooth (a delta lobe).
 pub const SMOOTH_ALPHA: f32 = 1.0e-4;
 
-/// GGX with roughness `alpha` (the slope's standard deviation scale; the
-/// `alpha` of Mitsuba and pbrt, not a "perceptual" roughness).
+/// A distribution with roughness `alpha` (the slope's standard deviation
+/// scale; the `alpha` of Mitsuba and pbrt, not a "perceptual" roughness).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ggx {
+pub struct Microfacet {
+    /// GGX or Beckmann.
+    pub distribution: MicrofacetDistribution,
     /// Roughness.
     pub alpha: f32,
 }
 
-impl Ggx {
+impl Microfacet {
+    /// GGX of roughness `alpha`.
+    pub fn ggx(alpha: f32) -> Self {
+        Self {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha,
+        }
+    }
+
     /// Density of microfacet normals `m` (per steradian, projected:
     /// `∫ D(m) cos θm dm = 1`).
     pub fn d(&self, m: Vec3A) -> f32 {
@@ -27,8 +41,17 @@ impl Ggx {
             return 0.0;
         }
         let a2 = self.alpha * self.alpha;
-        let s = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-        let d = 1.0 / (PI * a2 * s * s);
+        let d = match self.distribution {
+            MicrofacetDistribution::Ggx => {
+                let s = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+                1.0 / (PI * a2 * s * s)
+            }
+            MicrofacetDistribution::Beckmann => {
+                let cos2 = m.z * m.z;
+                let tan2 = (m.x * m.x + m.y * m.y) / cos2;
+                (-tan2 / a2).exp() / (PI * a2 * cos2 * cos2)
+            }
+        };
         // Far tails underflow to garbage in f32; they carry no energy.
         if d * m.z > 1.0e-20 {
             d
@@ -48,7 +71,19 @@ impl Ggx {
             return 1.0;
         }
         let tan2 = xy / (v.z * v.z);
-        2.0 / (1.0 + (1.0 + tan2).sqrt())
+        match self.distribution {
+            MicrofacetDistribution::Ggx => 2.0 / (1.0 + (1.0 + tan2).sqrt()),
+            MicrofacetDistribution::Beckmann => {
+                // Walter et al. 2007, eq. 27's rational fit in a = 1/(α tan θ),
+                // as Mitsuba 3 evaluates it.
+                let a = 1.0 / tan2.sqrt();
+                if a >= 1.6 {
+                    1.0
+                } else {
+                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+                }
+            }
+        }
     }
 
     /// Shadowing–masking of `wi` and `wo` by `m`.
@@ -56,18 +91,38 @@ impl Ggx {
         self.g1(wi, m) * self.g1(wo, m)
     }
 
-    /// Density of the visible normals from `v` (solid angle of `m`):
-    /// `G1(v, m) |v·m| D(m) / |cos θv|`.
-    pub fn pdf_visible(&self, v: Vec3A, m: Vec3A) -> f32 {
-        if v.z == 0.0 {
-            return 0.0;
+    /// Density (solid angle of `m`) with which [`sample_normal`](Self::sample_normal)
+    /// draws `m` seen from `v`: for GGX the visible normals,
+    /// `G1(v, m) |v·m| D(m) / |cos θv|`; for Beckmann `D(m) cos θm`.
+    pub fn pdf_normal(&self, v: Vec3A, m: Vec3A) -> f32 {
+        match self.distribution {
+            MicrofacetDistribution::Ggx => {
+                if v.z == 0.0 {
+                    return 0.0;
+                }
+                self.g1(v, m) * v.dot(m).abs() * self.d(m) / v.z.abs()
+            }
+            MicrofacetDistribution::Beckmann => self.d(m) * m.z.max(0.0),
         }
-        self.g1(v, m) * v.dot(m).abs() * self.d(m) / v.z.abs()
     }
 
-    /// A normal drawn from the normals visible from `v` (either hemisphere;
-    /// the result is in the upper one), density [`pdf_visible`](Self::pdf_visible).
-    pub fn sample_visible(&self, v: Vec3A, u: Vec2) -> Vec3A {
+    /// A microfacet normal for light leaving toward `v` (either hemisphere;
+    /// the result is in the upper one), density [`pdf_normal`](Self::pdf_normal).
+    pub fn sample_normal(&self, v: Vec3A, u: Vec2) -> Vec3A {
+        match self.distribution {
+            MicrofacetDistribution::Ggx => self.sample_visible_ggx(v, u),
+            MicrofacetDistribution::Beckmann => {
+                // tan² θm = −α² ln(1 − u) (Walter et al. 2007, eq. 28).
+                let tan2 = -self.alpha * self.alpha * (1.0 - u.x).max(f32::MIN_POSITIVE).ln();
+                let cos = 1.0 / (1.0 + tan2).sqrt();
+                let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.y;
+                Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos.max(1.0e-6)).normalize()
+            }
+        }
+    }
+
+    fn sample_visible_ggx(&self, v: Vec3A, u: Vec2) -> Vec3A {
         let v = if v.z < 0.0 { -v } else { v };
         // To the hemisphere configuration (Heitz 2018, §3.2).
         let vh = Vec3A::new(self.alpha * v.x, self.alpha * v.y, v.z).normalize();
@@ -99,8 +154,11 @@ mod tests {
     #[test]
     fn d_is_normalised_and_visible_normals_integrate_to_one() {
         let mut rng = Rng::new(3, Domain::Analysis, 0, 0);
-        for alpha in [0.05f32, 0.2, 0.6, 1.0] {
-            let g = Ggx { alpha };
+        for (alpha, distribution) in [0.05f32, 0.2, 0.6, 1.0]
+            .into_iter()
+            .flat_map(|a| [(a, MicrofacetDistribution::Ggx), (a, MicrofacetDistribution::Beckmann)])
+        {
+            let g = Microfacet { distribution, alpha };
             let n = 400_000;
             // ∫ D(m) cos θm dm by uniform sphere sampling.
             let mut projected = 0.0f64;
@@ -110,12 +168,12 @@ mod tests {
                 let (a, b) = rng.f32x2();
                 let m = uniform_sphere(Vec2::new(a, b));
                 projected += (g.d(m) * m.z.max(0.0) * 4.0 * PI) as f64;
-                visible += (g.pdf_visible(v, m) * 4.0 * PI) as f64;
+                visible += (g.pdf_normal(v, m) * 4.0 * PI) as f64;
             }
             let (p, vis) = (projected / n as f64, visible / n as f64);
             let tol = if alpha < 0.1 { 0.15 } else { 0.03 };
-            assert!((p - 1.0).abs() < tol, "alpha {alpha}: ∫D cos = {p}");
-            assert!((vis - 1.0).abs() < tol, "alpha {alpha}: ∫ visible pdf = {vis}");
+            assert!((p - 1.0).abs() < tol, "{distribution:?} {alpha}: ∫D cos = {p}");
+            assert!((vis - 1.0).abs() < tol, "{distribution:?} {alpha}: ∫ pdf = {vis}");
         }
     }
 }

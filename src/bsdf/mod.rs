@@ -31,7 +31,7 @@ use crate::math::{Vec2, Vec3A};
 use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
 use dielectric::{RoughDielectric, SmoothDielectric};
-use microfacet::{Ggx, SMOOTH_ALPHA};
+use microfacet::{Microfacet, SMOOTH_ALPHA};
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
 
@@ -178,8 +178,11 @@ fn mean(c: Vec3A) -> f32 {
     (c.x + c.y + c.z) / 3.0
 }
 
-fn ggx_or_smooth(roughness: f32) -> Option<Ggx> {
-    (roughness >= SMOOTH_ALPHA).then_some(Ggx { alpha: roughness })
+fn rough_or_smooth(roughness: f32, distribution: crate::scene::MicrofacetDistribution) -> Option<Microfacet> {
+    (roughness >= SMOOTH_ALPHA).then_some(Microfacet {
+        distribution,
+        alpha: roughness,
+    })
 }
 
 impl Bsdf {
@@ -195,22 +198,26 @@ impl Bsdf {
         if let Some(d) = m.dielectric {
             b.two_sided = false;
             let tint = d.tint;
-            let lobe = match ggx_or_smooth(d.roughness) {
+            let lobe = match rough_or_smooth(d.roughness, m.microfacet) {
                 None => Lobe::SmoothDielectric(SmoothDielectric {
                     eta: d.ior,
                     tint,
                     fresnel: d.fresnel.unwrap_or(default_fresnel),
                 }),
-                Some(ggx) => Lobe::RoughDielectric(RoughDielectric { eta: d.ior, tint, ggx }),
+                Some(microfacet) => Lobe::RoughDielectric(RoughDielectric {
+                    eta: d.ior,
+                    tint,
+                    microfacet,
+                }),
             };
             b.push(lobe, 1.0);
         } else if let Some(c) = m.conductor {
-            let lobe = match ggx_or_smooth(c.roughness) {
+            let lobe = match rough_or_smooth(c.roughness, m.microfacet) {
                 None => Lobe::SmoothConductor(SmoothConductor { eta: c.eta, k: c.k }),
-                Some(ggx) => Lobe::RoughConductor(RoughConductor {
+                Some(microfacet) => Lobe::RoughConductor(RoughConductor {
                     eta: c.eta,
                     k: c.k,
-                    ggx,
+                    microfacet,
                 }),
             };
             b.push(lobe, 1.0);

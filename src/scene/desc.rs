@@ -339,6 +339,8 @@ pub struct MaterialDesc {
     pub emission_strength: Option<Spanned<f64>>,
     /// Scatter only on the front side (the side the normal faces).
     pub one_sided: Option<Spanned<bool>>,
+    /// Microfacet distribution of the rough lobes: "ggx" or "beckmann".
+    pub microfacet: Option<Spanned<String>>,
 }
 
 /// `[materials.NAME.mirror]`.

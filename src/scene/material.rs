@@ -42,7 +42,7 @@ pub struct Dielectric {
     pub ior: f32,
     /// Colour filter on transmitted light.
     pub tint: Vec3A,
-    /// GGX roughness `alpha` (0: smooth). The Whitted integrator treats
+    /// Microfacet roughness `alpha` (0: smooth). The Whitted integrator treats
     /// every dielectric as smooth.
     pub roughness: f32,
     /// Fresnel formula; `None`: each integrator's own (Whitted: Schlick,
@@ -70,8 +70,28 @@ pub struct Conductor {
     pub eta: Vec3A,
     /// Extinction coefficient.
     pub k: Vec3A,
-    /// GGX roughness `alpha` (0: a perfect mirror).
+    /// Microfacet roughness `alpha` (0: a perfect mirror).
     pub roughness: f32,
+}
+
+/// The microfacet distribution of a material's rough lobes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MicrofacetDistribution {
+    /// GGX (Trowbridge–Reitz): long tails.
+    #[default]
+    Ggx,
+    /// Beckmann: a Gaussian distribution of slopes (Mitsuba's default).
+    Beckmann,
+}
+
+impl MicrofacetDistribution {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MicrofacetDistribution::Ggx => "ggx",
+            MicrofacetDistribution::Beckmann => "beckmann",
+        }
+    }
 }
 
 /// A smooth clear coating over the diffuse albedo (plastic, varnish).
@@ -114,6 +134,8 @@ pub struct Material {
     /// opaque surface reflects the same on both sides. Dielectrics always
     /// tell the sides apart.
     pub one_sided: bool,
+    /// The distribution of the rough conductor's or dielectric's microfacets.
+    pub microfacet: MicrofacetDistribution,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -237,6 +259,7 @@ impl Material {
             coating: None,
             emission: Vec3A::ZERO,
             one_sided: false,
+            microfacet: MicrofacetDistribution::Ggx,
             textures: None,
         }
     }
@@ -298,6 +321,7 @@ impl Material {
             coating: self.coating,
             emission: self.emission_at(uv),
             one_sided: self.one_sided,
+            microfacet: self.microfacet,
             textures: None,
         }
     }

@@ -27,8 +27,8 @@ pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
-    AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, Mirror, NormalMap,
-    ShadingModel,
+    AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution,
+    Mirror, NormalMap, ShadingModel,
 };
 pub use medium::Medium;
 

@@ -8,7 +8,9 @@ use crate::math::Vec3A;
 use crate::scene::desc::{FresnelName, MaterialDesc, ModelName, ParamDesc, Spanned};
 use crate::scene::material::{AlphaMask, MaterialTextures, NormalMap};
 use crate::scene::metals;
-use crate::scene::{Coating, Conductor, Dielectric, FresnelModel, Material, Mirror, ShadingModel};
+use crate::scene::{
+    Coating, Conductor, Dielectric, FresnelModel, Material, MicrofacetDistribution, Mirror, ShadingModel,
+};
 use crate::texture::Texture;
 use std::collections::BTreeMap;
 
@@ -239,6 +241,19 @@ impl Ctx<'_> {
         } else if let Some(s) = &m.alpha_cutoff {
             return Err(self.invalid(s.span(), "`alpha_cutoff` without an `alpha` mask"));
         }
+        let microfacet = match &m.microfacet {
+            None => MicrofacetDistribution::Ggx,
+            Some(d) => match d.get_ref().as_str() {
+                "ggx" => MicrofacetDistribution::Ggx,
+                "beckmann" => MicrofacetDistribution::Beckmann,
+                other => {
+                    return Err(self.invalid(
+                        d.span(),
+                        format!("unknown `microfacet` distribution `{other}`: expected ggx or beckmann"),
+                    ))
+                }
+            },
+        };
         Ok(Material {
             textures: textures.has_any().then(|| Box::new(textures)),
             name: name.into(),
@@ -256,6 +271,7 @@ impl Ctx<'_> {
             coating,
             emission,
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
+            microfacet,
         })
     }
 

@@ -9,7 +9,9 @@ use crate::math::Vec3A;
 use crate::scene::conductors::CONDUCTORS;
 use crate::scene::ior::{ior_names, named_ior};
 use crate::scene::load::SceneError;
-use crate::scene::{Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, NormalMap, ShadingModel};
+use crate::scene::{
+    Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution, NormalMap,
+};
 
 /// Mitsuba's default interior index of dielectrics (BK7).
 const BK7: f32 = 1.5046;
@@ -18,22 +20,12 @@ const AIR: f32 = 1.000277;
 /// Mitsuba's default interior index of plastics (polypropylene).
 const POLYPROPYLENE: f32 = 1.49;
 
-/// A material scattering nothing yet: the base every plugin fills.
+/// A material scattering nothing yet, one-sided: the base every plugin fills.
 fn blank(name: String) -> Material {
     Material {
-        name,
-        model: ShadingModel::BlinnPhong,
         ambient: Vec3A::ZERO,
-        diffuse: Vec3A::ZERO,
-        specular: Vec3A::ZERO,
-        shininess: 1.0,
-        mirror: None,
-        dielectric: None,
-        conductor: None,
-        coating: None,
-        emission: Vec3A::ZERO,
         one_sided: true,
-        textures: None,
+        ..Material::diffuse(&name, Vec3A::ZERO)
     }
 }
 
@@ -59,8 +51,9 @@ impl Builder<'_> {
                     self.colour(p, "specular_transmittance", Vec3A::ONE, SpectrumUse::Reflectance)?;
                 textures.dielectric_tint = tint_texture;
                 let roughness = if p.kind == "roughdielectric" {
-                    let (alpha, alpha_texture) = self.roughness(p)?;
+                    let (alpha, alpha_texture, distribution) = self.roughness(p)?;
                     textures.dielectric_roughness = alpha_texture;
+                    m.microfacet = distribution;
                     alpha
                 } else {
                     0.0
@@ -77,8 +70,9 @@ impl Builder<'_> {
                 let (eta, k) = conductor_ior(self, p)?;
                 unit_reflectance(p)?;
                 let roughness = if p.kind == "roughconductor" {
-                    let (alpha, alpha_texture) = self.roughness(p)?;
+                    let (alpha, alpha_texture, distribution) = self.roughness(p)?;
                     textures.conductor_roughness = alpha_texture;
+                    m.microfacet = distribution;
                     alpha
                 } else {
                     0.0
@@ -135,7 +129,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric (ggx), conductor, roughconductor (ggx), plastic, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, twosided and normalmap"
                 )))
             }
         }
@@ -146,17 +140,15 @@ impl Builder<'_> {
         Ok(m)
     }
 
-    /// The GGX `alpha` of a rough plugin (isotropic).
-    fn roughness(&self, p: &Plugin) -> Result<(f32, Option<crate::texture::Texture>), SceneError> {
-        let distribution = p.string("distribution")?.unwrap_or("beckmann");
-        if distribution != "ggx" {
-            let at = p.take("distribution").map_or(p.origin(), |e| &e.origin);
-            return Err(at.error(format!(
-                "{}: the `{distribution}` microfacet distribution{} is not supported; caustic's rough surfaces are GGX (`<string name=\"distribution\" value=\"ggx\"/>`)",
-                p.what(),
-                if p.has("distribution") { "" } else { " (Mitsuba's default)" }
-            )));
-        }
+    /// The `alpha` and distribution of a rough plugin (isotropic).
+    fn roughness(
+        &self,
+        p: &Plugin,
+    ) -> Result<(f32, Option<crate::texture::Texture>, MicrofacetDistribution), SceneError> {
+        let distribution = match p.choice("distribution", "beckmann", &["beckmann", "ggx"])? {
+            "ggx" => MicrofacetDistribution::Ggx,
+            _ => MicrofacetDistribution::Beckmann,
+        };
         // Visible-normal sampling or not: the same BSDF, another sampling.
         p.boolean("sample_visible")?;
         if p.has("alpha_u") || p.has("alpha_v") {
@@ -169,11 +161,11 @@ impl Builder<'_> {
                 return Err(p.error("anisotropic roughness (`alpha_u` ≠ `alpha_v`) is not supported"));
             }
             check_alpha(p, u)?;
-            return Ok((u, tu));
+            return Ok((u, tu, distribution));
         }
         let (alpha, texture) = self.scalar(p, "alpha", 0.1)?;
         check_alpha(p, alpha)?;
-        Ok((alpha, texture))
+        Ok((alpha, texture, distribution))
     }
 }
 
