@@ -109,6 +109,14 @@ fn set(table: &mut dyn TableLike, key: &str, item: Item) {
 impl EditableScene {
     /// Loads `path` (validated like `caustic render` does).
     pub fn open(path: &Path) -> Result<Self, SceneError> {
+        if scene::mitsuba::is_mitsuba_path(path) {
+            // The viewer writes its edits back through the TOML file.
+            return Err(SceneError::Toml {
+                path: path.to_path_buf(),
+                place: None,
+                message: "the viewer opens caustic TOML scenes; render a Mitsuba scene with `caustic render`".into(),
+            });
+        }
         // The loader checks size, encoding and every value first.
         let scene = scene::load_scene(path)?;
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
