@@ -300,7 +300,7 @@ fn the_room_agrees_with_mitsuba() {
     scene.settings.spp = 1024;
     scene.settings.seed = 3;
     let reference = read_exr(&dir.join("room-mitsuba.exr"), Some((32, 32))).unwrap();
-    let accel = accel::build(&scene, AccelKind::Embree, &AccelOptions::default()).unwrap();
+    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
     let film = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film;
     let (mut ours, mut theirs) = (Vec3A::ZERO, Vec3A::ZERO);
     let mut relmse = 0.0;
