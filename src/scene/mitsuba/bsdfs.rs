@@ -50,14 +50,7 @@ impl Builder<'_> {
                 let (tint, tint_texture) =
                     self.colour(p, "specular_transmittance", Vec3A::ONE, SpectrumUse::Reflectance)?;
                 textures.dielectric_tint = tint_texture;
-                let roughness = if p.kind == "roughdielectric" {
-                    let (alpha, alpha_texture, distribution) = self.roughness(p)?;
-                    textures.dielectric_roughness = alpha_texture;
-                    m.microfacet = distribution;
-                    alpha
-                } else {
-                    0.0
-                };
+                let roughness = self.rough_part(p, &mut m, &mut textures.dielectric_roughness)?;
                 m.dielectric = Some(Dielectric {
                     ior: eta,
                     tint,
@@ -69,14 +62,7 @@ impl Builder<'_> {
             "conductor" | "roughconductor" => {
                 let (eta, k) = conductor_ior(self, p)?;
                 unit_reflectance(p)?;
-                let roughness = if p.kind == "roughconductor" {
-                    let (alpha, alpha_texture, distribution) = self.roughness(p)?;
-                    textures.conductor_roughness = alpha_texture;
-                    m.microfacet = distribution;
-                    alpha
-                } else {
-                    0.0
-                };
+                let roughness = self.rough_part(p, &mut m, &mut textures.conductor_roughness)?;
                 m.conductor = Some(Conductor { eta, k, roughness });
             }
             "plastic" => {
@@ -138,6 +124,23 @@ impl Builder<'_> {
             m.textures = Some(Box::new(textures));
         }
         Ok(m)
+    }
+
+    /// The roughness of `rough*` plugins (0 for the smooth ones): sets the
+    /// material's distribution and the roughness texture `slot`.
+    fn rough_part(
+        &self,
+        p: &Plugin,
+        m: &mut Material,
+        slot: &mut Option<crate::texture::Texture>,
+    ) -> Result<f32, SceneError> {
+        if !p.kind.starts_with("rough") {
+            return Ok(0.0);
+        }
+        let (alpha, texture, distribution) = self.roughness(p)?;
+        *slot = texture;
+        m.microfacet = distribution;
+        Ok(alpha)
     }
 
     /// The `alpha` and distribution of a rough plugin (isotropic).

@@ -27,12 +27,7 @@ impl Builder<'_> {
         let light = match p.kind {
             "point" => {
                 let intensity = self.emission(p, "intensity")?;
-                let position = match (p.vector("position")?, p.transform("to_world")?) {
-                    (Some(_), Some(_)) => return Err(p.error("give `position` or `to_world`, not both")),
-                    (Some(v), None) => v,
-                    (None, Some(m)) => affine(p, &m)?.transform_point3(Vec3::ZERO),
-                    (None, None) => Vec3::ZERO,
-                };
+                let position = placed(p, "position", |m| m.transform_point3(Vec3::ZERO), Vec3::ZERO)?;
                 Light::Point {
                     position: position.into(),
                     intensity,
@@ -62,12 +57,7 @@ impl Builder<'_> {
             }
             "directional" => {
                 let irradiance = self.emission(p, "irradiance")?;
-                let direction = match (p.vector("direction")?, p.transform("to_world")?) {
-                    (Some(_), Some(_)) => return Err(p.error("give `direction` or `to_world`, not both")),
-                    (Some(v), None) => v,
-                    (None, Some(m)) => affine(p, &m)?.transform_vector3(Vec3::Z),
-                    (None, None) => Vec3::Z,
-                };
+                let direction = placed(p, "direction", |m| m.transform_vector3(Vec3::Z), Vec3::Z)?;
                 let direction = direction
                     .try_normalize()
                     .ok_or_else(|| p.error("the direction is zero"))?;
@@ -113,6 +103,22 @@ impl Builder<'_> {
         };
         p.finish()?;
         Ok(light)
+    }
+}
+
+/// The vector property `name`, or what `to_world` makes of the light's
+/// frame (`from_world`), or `default`; both given is an error.
+fn placed(
+    p: &Plugin,
+    name: &str,
+    from_world: impl Fn(&glam::Affine3A) -> Vec3,
+    default: Vec3,
+) -> Result<Vec3, SceneError> {
+    match (p.vector(name)?, p.transform("to_world")?) {
+        (Some(_), Some(_)) => Err(p.error(format!("give `{name}` or `to_world`, not both"))),
+        (Some(v), None) => Ok(v),
+        (None, Some(m)) => Ok(from_world(&affine(p, &m)?)),
+        (None, None) => Ok(default),
     }
 }
 

@@ -133,15 +133,10 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     let Builder {
         materials, mut objects, ..
     } = b;
-    for (o, face) in objects.iter_mut().zip(meshes.face_normals_of_objects) {
-        if face {
-            if let Shape::Mesh { smooth, .. } = &mut o.shape {
-                *smooth = false;
-            }
-        }
-    }
-    for o in &objects {
-        if let Shape::Mesh { mesh, .. } = &o.shape {
+    for o in &mut objects {
+        if let Shape::Mesh { mesh, smooth, .. } = &mut o.shape {
+            // A `.serialized` shape's flags may ask for face normals.
+            *smooth &= !meshes.face_normals[*mesh as usize];
             let material = &materials[o.material as usize];
             let mesh = &meshes.meshes[*mesh as usize];
             if material.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) && mesh.uvs.is_empty() {
@@ -204,7 +199,8 @@ enum MeshSource {
 
 struct LoadedMeshes {
     meshes: Vec<Arc<Mesh>>,
-    face_normals_of_objects: Vec<bool>,
+    /// Per mesh: its file asks for face normals.
+    face_normals: Vec<bool>,
 }
 
 /// What the plugins add to, in file order.
@@ -295,24 +291,13 @@ impl Builder<'_> {
             })
             .collect();
         let mut meshes = Vec::with_capacity(loaded.len());
-        let mut face = Vec::with_capacity(loaded.len());
+        let mut face_normals = Vec::with_capacity(loaded.len());
         for r in loaded {
             let (m, f) = r?;
             meshes.push(Arc::new(m));
-            face.push(f);
+            face_normals.push(f);
         }
-        let face_normals_of_objects = self
-            .objects
-            .iter()
-            .map(|o| match o.shape {
-                Shape::Mesh { mesh, .. } => face[mesh as usize],
-                _ => false,
-            })
-            .collect();
-        Ok(LoadedMeshes {
-            meshes,
-            face_normals_of_objects,
-        })
+        Ok(LoadedMeshes { meshes, face_normals })
     }
 }
 

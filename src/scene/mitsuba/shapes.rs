@@ -5,7 +5,7 @@
 use super::emitters::affine;
 use super::props::Plugin;
 use super::spectrum::SpectrumUse;
-use super::xml::{resolve, Origin};
+use super::xml::resolve;
 use super::{Builder, MeshSource};
 use crate::geometry::Mesh;
 use crate::math::{Transform, Vec2, Vec3, Vec3A};
@@ -88,7 +88,7 @@ impl Builder<'_> {
                 if p.kind == "ply" && p.has("flip_tex_coords") {
                     return Err(p.error("`flip_tex_coords` is an OBJ parameter"));
                 }
-                let path = resolve(file, at_dir(&at), &self.doc.search_path);
+                let path = resolve(file, at.dir(), &self.doc.search_path);
                 let mesh = self.mesh_file(MeshSource::File {
                     path,
                     serialized: (p.kind == "serialized").then_some(shape_index),
@@ -233,10 +233,6 @@ impl Builder<'_> {
     fn transform(&self, p: &Plugin, m: &Mat4) -> Result<Transform, SceneError> {
         Transform::from_affine(affine(p, m)?).ok_or_else(|| p.error("`to_world` is singular"))
     }
-}
-
-fn at_dir(origin: &Origin) -> &std::path::Path {
-    origin.file.parent().unwrap_or(std::path::Path::new(""))
 }
 
 /// The rectangle [−1, 1]² as two triangles with Mitsuba's UVs, facing −z

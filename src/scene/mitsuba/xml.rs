@@ -21,6 +21,11 @@ pub struct Origin {
 }
 
 impl Origin {
+    /// The folder of the file: where relative names in it resolve last.
+    pub fn dir(&self) -> &Path {
+        self.file.parent().unwrap_or(Path::new(""))
+    }
+
     /// An error at this place.
     pub fn error(&self, message: impl Into<String>) -> SceneError {
         SceneError::Invalid {
@@ -70,7 +75,7 @@ impl Element {
 
     /// The directory relative file names in this element resolve against.
     pub fn dir(&self) -> &Path {
-        self.origin.file.parent().unwrap_or(Path::new(""))
+        self.origin.dir()
     }
 }
 
