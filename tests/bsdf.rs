@@ -145,11 +145,30 @@ fn beckmann(mut m: Material) -> Material {
 
 fn plastic(albedo: f32) -> Material {
     let mut m = Material::diffuse("plastic", Vec3A::new(albedo, 0.5 * albedo, 0.2));
-    m.coating = Some(Coating { ior: 1.5 });
+    m.coating = Some(Coating::smooth(1.5));
     m
 }
 
-fn bsdf(m: &Material) -> Bsdf {
+fn rough_plastic(albedo: f32, alpha: f32, nonlinear: bool) -> Material {
+    let mut m = Material::diffuse("rough plastic", Vec3A::new(albedo, 0.5 * albedo, 0.2));
+    m.coating = Some(Coating {
+        roughness: alpha,
+        nonlinear,
+        ..Coating::smooth(1.5)
+    });
+    m
+}
+
+fn thin_glass() -> Material {
+    let mut m = Material::diffuse("thin glass", Vec3A::ZERO);
+    m.dielectric = Some(Dielectric {
+        thin: true,
+        ..Dielectric::smooth(1.5, Vec3A::new(1.0, 0.8, 0.6))
+    });
+    m
+}
+
+fn bsdf(m: &Material) -> Bsdf<'_> {
     Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance)
 }
 
@@ -185,6 +204,13 @@ fn microfacet_lobes_sample_their_density() {
         chi2("beckmann gold 0.3", &bsdf(&beckmann(gold(0.3))), wo);
         chi2("beckmann gold 0.6", &bsdf(&beckmann(gold(0.6))), wo);
         chi2("plastic", &bsdf(&plastic(0.8)), wo);
+        chi2("rough plastic 0.1", &bsdf(&rough_plastic(0.8, 0.1, false)), wo);
+        chi2("rough plastic 0.5", &bsdf(&rough_plastic(0.3, 0.5, true)), wo);
+        chi2(
+            "beckmann rough plastic 0.3",
+            &bsdf(&beckmann(rough_plastic(0.6, 0.3, false))),
+            wo,
+        );
     }
     // Rough glass from outside and from inside (transmission included).
     for wo in [
@@ -210,6 +236,8 @@ fn reflection_is_reciprocal() {
         beckmann(gold(0.3)),
         beckmann(glass(0.4)),
         plastic(0.7),
+        rough_plastic(0.7, 0.2, false),
+        beckmann(rough_plastic(0.7, 0.4, true)),
         glass(0.4),
     ];
     for m in &materials {
@@ -262,6 +290,9 @@ fn no_bsdf_reflects_more_than_it_receives() {
         ("rough gold", gold(0.5)),
         ("beckmann gold", beckmann(gold(0.5))),
         ("plastic white", plastic(1.0)),
+        ("rough plastic white", rough_plastic(1.0, 0.3, false)),
+        ("rough plastic white, nonlinear", rough_plastic(1.0, 0.05, true)),
+        ("beckmann rough plastic white", beckmann(rough_plastic(1.0, 0.6, false))),
     ];
     for (name, m) in &cases {
         let b = bsdf(m);
@@ -276,7 +307,8 @@ fn no_bsdf_reflects_more_than_it_receives() {
     // Glass: reflected + transmitted power is all of it (importance
     // transport: radiance scaling across the interface is not energy).
     for roughness in [0.0, 0.3] {
-        let b = Bsdf::for_material(&glass(roughness), FresnelModel::Exact, Transport::Importance);
+        let glass = glass(roughness);
+        let b = Bsdf::for_material(&glass, FresnelModel::Exact, Transport::Importance);
         for wo in [direction(0.4, 0.0), direction(PI - 0.3, 0.0)] {
             let (a, sigma) = albedo(&b, wo, &mut rng);
             assert!(
@@ -287,5 +319,40 @@ fn no_bsdf_reflects_more_than_it_receives() {
                 assert!((a.x - 1.0).abs() < 1e-3, "smooth glass loses energy: {a}");
             }
         }
+    }
+}
+
+#[test]
+fn a_thin_sheet_reflects_the_series_of_its_faces_and_transmits_the_rest_straight() {
+    let m = thin_glass();
+    let b = bsdf(&m);
+    for wo in [direction(0.2, 0.3), direction(1.3, 2.0), direction(PI - 0.7, 1.0)] {
+        let r1 = caustic::bsdf::fresnel::dielectric(wo.z.abs(), 1.5).0;
+        let t1 = 1.0 - r1;
+        let r = r1 + t1 * t1 * r1 / (1.0 - r1 * r1);
+        let (mut reflected, mut transmitted) = (0.0f32, 0.0f32);
+        let n = 20_000;
+        for i in 0..n {
+            let s = b
+                .sample(wo, (i as f32 + 0.5) / n as f32, Vec3A::ZERO.truncate())
+                .expect("sheets scatter");
+            assert!(s.delta && s.eta == 1.0);
+            if s.transmission {
+                // Unbent, tinted, with all the light that is not reflected.
+                assert!((s.wi + wo).length() < 1e-6, "{} from {wo}", s.wi);
+                assert!((s.weight() - Vec3A::new(1.0, 0.8, 0.6)).abs().max_element() < 1e-5);
+                transmitted += 1.0;
+            } else {
+                assert!((s.wi - Vec3A::new(-wo.x, -wo.y, wo.z)).length() < 1e-6);
+                assert!((s.weight() - Vec3A::ONE).abs().max_element() < 1e-5);
+                reflected += 1.0;
+            }
+        }
+        assert!(
+            (reflected / n as f32 - r).abs() < 1e-3,
+            "{wo}: {} against {r}",
+            reflected / n as f32
+        );
+        assert!((transmitted / n as f32 - (1.0 - r)).abs() < 1e-3);
     }
 }

@@ -180,7 +180,7 @@ fn plugins_build_the_scene_model() {
         other => panic!("{other:?}"),
     }
     let plastic = &scene.materials[scene.objects[0].material as usize];
-    assert!(!plastic.one_sided && (plastic.coating.unwrap().ior - 1.5 / 1.000277).abs() < 1e-6);
+    assert!(!plastic.one_sided && (plastic.coating.as_ref().unwrap().ior - 1.5 / 1.000277).abs() < 1e-6);
     assert_eq!(plastic.diffuse, Vec3A::splat(0.5));
     match &scene.objects[1].shape {
         Shape::Quad(q) => {

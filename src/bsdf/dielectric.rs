@@ -73,6 +73,51 @@ impl SmoothDielectric {
     }
 }
 
+/// The reflectance of a thin dielectric sheet (a window pane, a soap
+/// film): light bounces between its two parallel faces, each reflecting
+/// `R` at the incidence `cos_i`, so the sheet reflects the whole series
+/// `R + T² R / (1 − R²)` and transmits the rest straight through (Mitsuba 3's
+/// `thindielectric`; absorption inside the sheet is neglected).
+pub fn thin_sheet_reflectance(model: FresnelModel, cos_i: f32, eta: f32) -> f32 {
+    let r = reflectance(model, cos_i.abs(), eta);
+    if r < 1.0 {
+        let t = 1.0 - r;
+        r + t * t * r / (1.0 - r * r)
+    } else {
+        r
+    }
+}
+
+/// A thin dielectric sheet: a delta reflection and a delta transmission
+/// that does not bend the ray, the same from both sides.
+#[derive(Clone, Copy, Debug)]
+pub struct ThinDielectric {
+    /// Index of the sheet relative to the outside.
+    pub eta: f32,
+    /// Colour filter on transmitted light.
+    pub tint: Vec3A,
+    /// Fresnel formula.
+    pub fresnel: FresnelModel,
+}
+
+impl ThinDielectric {
+    pub(super) fn sample(&self, wo: Vec3A, uc: f32) -> Option<BsdfSample> {
+        if wo.z == 0.0 {
+            return None;
+        }
+        let r = thin_sheet_reflectance(self.fresnel, wo.z, self.eta);
+        let t = 1.0 - r;
+        if uc < r || t <= 0.0 {
+            let wi = Vec3A::new(-wo.x, -wo.y, wo.z);
+            return Some(BsdfSample::specular(wi, Vec3A::splat(r / wi.z.abs()), r));
+        }
+        let wi = -wo;
+        let mut s = BsdfSample::specular(wi, self.tint * (t / wi.z.abs()), t);
+        s.transmission = true;
+        Some(s)
+    }
+}
+
 /// A rough dielectric interface (GGX).
 #[derive(Clone, Copy, Debug)]
 pub struct RoughDielectric {

@@ -22,6 +22,7 @@ pub mod fresnel;
 pub mod microfacet;
 pub mod phong;
 pub mod plastic;
+pub mod rough_plastic;
 pub mod specular;
 
 pub use crate::scene::FresnelModel;
@@ -30,10 +31,11 @@ pub use specular::{fresnel_schlick, reflect, refract, DielectricInterface};
 use crate::math::{Vec2, Vec3A};
 use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
-use dielectric::{RoughDielectric, SmoothDielectric};
+use dielectric::{RoughDielectric, SmoothDielectric, ThinDielectric};
 use microfacet::{Microfacet, SMOOTH_ALPHA};
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
+use rough_plastic::RoughPlastic;
 
 /// What a path carries: radiance from the camera, or power (importance)
 /// from a light (photons). Only refraction tells them apart.
@@ -93,18 +95,20 @@ impl BsdfSample {
 
 /// One lobe of a material.
 #[derive(Clone, Copy, Debug)]
-enum Lobe {
+enum Lobe<'a> {
     Lambert(Lambert),
     Highlight(Highlight),
     Mirror(Mirror),
     SmoothDielectric(SmoothDielectric),
+    ThinDielectric(ThinDielectric),
     RoughDielectric(RoughDielectric),
     SmoothConductor(SmoothConductor),
     RoughConductor(RoughConductor),
     Plastic(Plastic),
+    RoughPlastic(RoughPlastic<'a>),
 }
 
-impl Lobe {
+impl Lobe<'_> {
     fn eval(&self, wo: Vec3A, wi: Vec3A, transport: Transport) -> Vec3A {
         match self {
             Lobe::Lambert(l) => l.eval(wo, wi),
@@ -112,7 +116,10 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.eval(wo, wi, transport),
             Lobe::RoughConductor(c) => c.eval(wo, wi),
             Lobe::Plastic(p) => p.eval(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => Vec3A::ZERO,
+            Lobe::RoughPlastic(p) => p.eval(wo, wi),
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => {
+                Vec3A::ZERO
+            }
         }
     }
 
@@ -123,7 +130,8 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.pdf(wo, wi),
             Lobe::RoughConductor(c) => c.pdf(wo, wi),
             Lobe::Plastic(p) => p.pdf(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 0.0,
+            Lobe::RoughPlastic(p) => p.pdf(wo, wi),
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => 0.0,
         }
     }
 
@@ -133,17 +141,19 @@ impl Lobe {
             Lobe::Highlight(h) => h.sample(wo, u),
             Lobe::Mirror(m) => m.sample(wo),
             Lobe::SmoothDielectric(d) => d.sample(wo, uc, transport),
+            Lobe::ThinDielectric(d) => d.sample(wo, uc),
             Lobe::RoughDielectric(d) => d.sample(wo, uc, u, transport),
             Lobe::SmoothConductor(c) => c.sample(wo),
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
+            Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
         }
     }
 
     /// Probability that [`Lobe::sample`] returns a delta direction.
     fn delta_probability(&self, wo: Vec3A) -> f32 {
         match self {
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 1.0,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => 1.0,
             Lobe::Plastic(p) => p.delta_probability(wo),
             _ => 0.0,
         }
@@ -153,7 +163,7 @@ impl Lobe {
     fn is_smooth_only(&self) -> bool {
         matches!(
             self,
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_)
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_)
         )
     }
 }
@@ -165,8 +175,8 @@ const MAX_LOBES: usize = 3;
 /// one chosen per sample with a probability proportional to its mean
 /// reflectance.
 #[derive(Clone, Copy, Debug)]
-pub struct Bsdf {
-    lobes: [(Lobe, f32); MAX_LOBES],
+pub struct Bsdf<'a> {
+    lobes: [(Lobe<'a>, f32); MAX_LOBES],
     count: usize,
     /// Reflection-only materials scatter the same on both sides (the
     /// frame is flipped toward `wo`); dielectrics tell inside from outside.
@@ -185,10 +195,10 @@ fn rough_or_smooth(roughness: f32, distribution: crate::scene::MicrofacetDistrib
     })
 }
 
-impl Bsdf {
+impl<'a> Bsdf<'a> {
     /// The BSDF of `m`, with `default_fresnel` for dielectrics that do not
     /// name a Fresnel formula.
-    pub fn for_material(m: &Material, default_fresnel: FresnelModel, transport: Transport) -> Self {
+    pub fn for_material(m: &'a Material, default_fresnel: FresnelModel, transport: Transport) -> Self {
         let mut b = Self {
             lobes: [(Lobe::Lambert(Lambert { kd: Vec3A::ZERO }), 0.0); MAX_LOBES],
             count: 0,
@@ -199,6 +209,11 @@ impl Bsdf {
             b.two_sided = false;
             let tint = d.tint;
             let lobe = match rough_or_smooth(d.roughness, m.microfacet) {
+                None if d.thin => Lobe::ThinDielectric(ThinDielectric {
+                    eta: d.ior,
+                    tint,
+                    fresnel: d.fresnel.unwrap_or(default_fresnel),
+                }),
                 None => Lobe::SmoothDielectric(SmoothDielectric {
                     eta: d.ior,
                     tint,
@@ -221,14 +236,22 @@ impl Bsdf {
                 }),
             };
             b.push(lobe, 1.0);
-        } else if let Some(c) = m.coating {
-            b.push(
-                Lobe::Plastic(Plastic {
+        } else if let Some(c) = &m.coating {
+            let lobe = match rough_or_smooth(c.roughness, m.microfacet) {
+                None => Lobe::Plastic(Plastic {
                     kd: m.diffuse,
                     eta: c.ior,
+                    nonlinear: c.nonlinear,
                 }),
-                1.0,
-            );
+                Some(microfacet) => {
+                    let table = c
+                        .table
+                        .0
+                        .get_or_init(|| rough_plastic::coating_table(c.ior, microfacet));
+                    Lobe::RoughPlastic(RoughPlastic::new(m.diffuse, c.ior, microfacet, c.nonlinear, table))
+                }
+            };
+            b.push(lobe, 1.0);
         } else {
             let r = m.mirror.map_or(0.0, |mi| mi.reflectivity);
             let kd = m.diffuse * (1.0 - r);
@@ -250,14 +273,14 @@ impl Bsdf {
         b
     }
 
-    fn push(&mut self, lobe: Lobe, weight: f32) {
+    fn push(&mut self, lobe: Lobe<'a>, weight: f32) {
         if weight > 0.0 && self.count < MAX_LOBES {
             self.lobes[self.count] = (lobe, weight);
             self.count += 1;
         }
     }
 
-    fn lobes(&self) -> &[(Lobe, f32)] {
+    fn lobes(&self) -> &[(Lobe<'a>, f32)] {
         &self.lobes[..self.count]
     }
 

@@ -5,7 +5,8 @@
 //! `1 / (1 − F_dr)` with the coating's hemispherical internal reflectance
 //! `F_dr`), and leaves through the coating again. This is the model of
 //! Mitsuba 3's `plastic` (linear variant):
-//! `f = kd / (1 − F_dr(1/η)) · (1 − F(θi)) (1 − F(θo)) / (η² π)`.
+//! `f = kd / (1 − F_dr(1/η)) · (1 − F(θi)) (1 − F(θo)) / (η² π)`, or with
+//! `kd / (1 − kd F_dr)` in the nonlinear variant.
 
 use super::fresnel;
 use super::BsdfSample;
@@ -20,6 +21,8 @@ pub struct Plastic {
     pub kd: Vec3A,
     /// Index of the coating relative to the outside.
     pub eta: f32,
+    /// The base's colour tints every inter-reflection (Mitsuba's `nonlinear`).
+    pub nonlinear: bool,
 }
 
 impl Plastic {
@@ -47,7 +50,12 @@ impl Plastic {
     }
 
     fn base(&self) -> Vec3A {
-        self.kd / (1.0 - fresnel::diffuse_reflectance(1.0 / self.eta))
+        let f_dr = fresnel::diffuse_reflectance(1.0 / self.eta);
+        if self.nonlinear {
+            self.kd / (Vec3A::ONE - self.kd * f_dr)
+        } else {
+            self.kd / (1.0 - f_dr)
+        }
     }
 
     pub(super) fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {

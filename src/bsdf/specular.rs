@@ -4,7 +4,7 @@
 
 pub use super::fresnel::fresnel_schlick;
 use crate::math::Vec3A;
-use crate::scene::{FresnelModel, SurfaceInteraction};
+use crate::scene::{Dielectric, FresnelModel, SurfaceInteraction};
 
 /// Mirror direction of `d` about the unit normal `n`: `d − 2(d·n)n`.
 #[inline]
@@ -51,9 +51,50 @@ pub struct DielectricInterface {
     pub reflected: Vec3A,
     /// Refracted direction with `cos θi`, `cos θt`; `None` under total internal reflection.
     pub refracted: Option<(Vec3A, f32, f32)>,
+    /// A thin sheet: the "refracted" direction is the incident one, and
+    /// [`reflectance`](Self::reflectance) sums the light the sheet's two
+    /// faces reflect.
+    pub thin: bool,
 }
 
 impl DielectricInterface {
+    /// The interface of the dielectric material `d` hit by direction `dir`
+    /// at `si`: [`at`](Self::at), or for a thin sheet the mirror direction
+    /// and the unbent transmission.
+    pub fn of(dir: Vec3A, si: &SurfaceInteraction, d: &Dielectric) -> Self {
+        if !d.thin {
+            return Self::at(dir, si, d.ior);
+        }
+        let facing = if dir.dot(si.ng) < 0.0 { 1.0 } else { -1.0 };
+        let (ng, ns) = (si.ng * facing, si.ns * facing);
+        let mut reflected = reflect(dir, ns);
+        if reflected.dot(ng) <= 0.0 {
+            reflected = reflect(dir, ng);
+        }
+        let cos_i = (-dir.dot(ns)).clamp(0.0, 1.0);
+        let (_, cos_t) = super::fresnel::dielectric(cos_i, d.ior);
+        Self {
+            n1: 1.0,
+            n2: d.ior,
+            reflected,
+            refracted: Some((dir, cos_i, cos_t.abs())),
+            thin: true,
+        }
+    }
+
+    /// The fraction of the light reflected, from the cosines that come with
+    /// [`refracted`](Self::refracted) (for a sheet, the series of its two
+    /// faces' reflections, [`thin_sheet_reflectance`](super::dielectric::thin_sheet_reflectance)).
+    pub fn reflectance(&self, model: FresnelModel, cos_i: f32, cos_t: f32) -> f32 {
+        let r = fresnel(model, self.n1, self.n2, cos_i, cos_t);
+        if self.thin && r < 1.0 {
+            let t = 1.0 - r;
+            r + t * t * r / (1.0 - r * r)
+        } else {
+            r
+        }
+    }
+
     /// The interface hit by direction `dir` at `si` (inside IOR `ior`, outside 1).
     ///
     /// Entering or leaving is decided by the GEOMETRIC normal (outward for
@@ -84,6 +125,7 @@ impl DielectricInterface {
             n2,
             reflected,
             refracted,
+            thin: false,
         }
     }
 }

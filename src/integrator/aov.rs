@@ -44,7 +44,10 @@ enum Step {
 fn step(m: &Material) -> Step {
     let surface = (m.diffuse + m.specular).min(Vec3A::ONE);
     if let Some(d) = m.dielectric {
-        return if d.roughness == 0.0 {
+        return if d.thin {
+            // Through the sheet, unbent (its index 1 leaves the ray as it is).
+            Step::Refract(d.tint, 1.0)
+        } else if d.roughness == 0.0 {
             Step::Refract(d.tint, d.ior)
         } else {
             Step::Stop(d.tint.min(Vec3A::ONE))

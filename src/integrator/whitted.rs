@@ -46,7 +46,7 @@ use super::photon::{GatherParams, PhotonMap, SiteCache};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
 use crate::bsdf::phong;
-use crate::bsdf::specular::{self, reflect, DielectricInterface};
+use crate::bsdf::specular::{reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::sampling::{stratified, stratum_order};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
@@ -492,16 +492,17 @@ impl<'a> Whitted<'a> {
 
     /// A metal or a coated diffuse: direct light on its non-delta lobes
     /// and, when it has one, the mirror reflection weighted by its Fresnel
-    /// reflectance (a rough metal shows no reflection in this model).
+    /// reflectance (a rough metal or coating shows no reflection in this
+    /// model).
     fn layered(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
         let local = self.direct(ray, si, m, Local::Bsdf(&bsdf), ctx);
-        let weight = match (m.conductor, m.coating) {
+        let weight = match (m.conductor, m.coating.as_ref()) {
             (Some(c), _) if c.roughness == 0.0 => {
                 let (_, ns) = facing(si, -ray.dir);
                 crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k)
             }
-            (_, Some(c)) => {
+            (_, Some(c)) if c.roughness == 0.0 => {
                 let (_, ns) = facing(si, -ray.dir);
                 Vec3A::splat(crate::bsdf::fresnel::dielectric(-ray.dir.dot(ns), c.ior).0)
             }
@@ -532,17 +533,17 @@ impl<'a> Whitted<'a> {
         if !self.can_bounce(depth) {
             return highlight;
         }
+        let interface = DielectricInterface::of(ray.dir, si, &d);
         let DielectricInterface {
-            n1,
-            n2,
             reflected: reflected_dir,
             refracted,
-        } = DielectricInterface::at(ray.dir, si, d.ior);
+            ..
+        } = interface;
         let Some((refracted_dir, cos_i, cos_t)) = refracted else {
             // Total internal reflection: all the light is reflected.
             return highlight + self.trace_secondary(si, reflected_dir, depth, ctx);
         };
-        let r = specular::fresnel(d.fresnel.unwrap_or(FresnelModel::Schlick), n1, n2, cos_i, cos_t);
+        let r = interface.reflectance(d.fresnel.unwrap_or(FresnelModel::Schlick), cos_i, cos_t);
         if self.plan.spread() {
             // One branch, chosen with probability R / (1 − R) and divided by
             // that probability: R·L_r / R and (1−R)·tint·L_t / (1−R). The
@@ -575,7 +576,7 @@ enum Local<'b> {
     /// The highlight alone, for point lights only (dielectrics).
     Highlights,
     /// The non-delta lobes of a metal or a coated diffuse.
-    Bsdf(&'b Bsdf),
+    Bsdf(&'b Bsdf<'b>),
 }
 
 /// Geometric and shading normals turned toward `wo` (the viewer), both by

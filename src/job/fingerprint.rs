@@ -124,6 +124,27 @@ fn fingerprint_of(
     }
     let materials: Vec<encoding::Material> = scene.materials.iter().map(encoding::Material::of).collect();
     field("materials", format!("{materials:?}").as_bytes());
+    // What a material's kind adds to the fields above, only where it differs
+    // from the defaults (the fingerprint of a scene that uses none of it is
+    // the one before these existed).
+    for (i, m) in scene.materials.iter().enumerate() {
+        let mut text = String::new();
+        if m.one_sided {
+            text += " one-sided";
+        }
+        if m.microfacet != crate::scene::MicrofacetDistribution::Ggx {
+            text += &format!(" microfacet {}", m.microfacet.name());
+        }
+        if m.dielectric.is_some_and(|d| d.thin) {
+            text += " thin";
+        }
+        if let Some(c) = m.coating.as_ref().filter(|c| c.roughness > 0.0 || c.nonlinear) {
+            text += &format!(" coating roughness {:?} nonlinear {}", c.roughness, c.nonlinear);
+        }
+        if !text.is_empty() {
+            field("material kind", format!("material {i}:{text}").as_bytes());
+        }
+    }
     // Emission, only for the materials that emit (the fingerprint of a
     // scene without emitting materials is the one before they existed).
     for (i, m) in scene.materials.iter().enumerate() {
@@ -369,7 +390,7 @@ mod encoding {
                     k: c.k,
                     roughness: c.roughness,
                 }),
-                coating: m.coating.map(|c| Coating { ior: c.ior }),
+                coating: m.coating.as_ref().map(|c| Coating { ior: c.ior }),
             }
         }
     }
@@ -457,7 +478,7 @@ mod tests {
                 k: crate::math::Vec3A::ZERO,
                 roughness: 0.1,
             }),
-            coating: Some(crate::scene::Coating { ior: 1.4 }),
+            coating: Some(crate::scene::Coating::smooth(1.4)),
             ..crate::scene::Material::diffuse("g", crate::math::Vec3A::ZERO)
         };
         let text = format!("{:?}", encoding::Material::of(&g));

@@ -365,6 +365,8 @@ pub struct DielectricDesc {
     pub roughness: Option<Spanned<ParamDesc>>,
     /// Fresnel formula.
     pub fresnel: Option<FresnelName>,
+    /// A thin sheet: transmitted light passes straight through.
+    pub thin: Option<Spanned<bool>>,
 }
 
 /// Fresnel formula names.
@@ -397,6 +399,11 @@ pub struct ConductorDesc {
 pub struct CoatingDesc {
     /// Index of refraction of the coating.
     pub ior: Option<Spanned<f64>>,
+    /// Microfacet roughness `alpha` of the coating (0: smooth), in the
+    /// material's `microfacet` distribution.
+    pub roughness: Option<Spanned<f64>>,
+    /// The base's colour tints every inter-reflection under the coating.
+    pub nonlinear: Option<bool>,
 }
 
 /// `[[lights]]`: the keys of every light type (the loader checks which

@@ -48,6 +48,10 @@ pub struct Dielectric {
     /// Fresnel formula; `None`: each integrator's own (Whitted: Schlick,
     /// as in the original report; path: exact).
     pub fresnel: Option<FresnelModel>,
+    /// A thin sheet (a window pane) rather than the boundary of a solid:
+    /// light that is not reflected by the sheet's two faces passes
+    /// straight through. Always smooth.
+    pub thin: bool,
 }
 
 impl Dielectric {
@@ -58,6 +62,7 @@ impl Dielectric {
             tint,
             roughness: 0.0,
             fresnel: None,
+            thin: false,
         }
     }
 }
@@ -94,11 +99,79 @@ impl MicrofacetDistribution {
     }
 }
 
-/// A smooth clear coating over the diffuse albedo (plastic, varnish).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A clear dielectric coating over the diffuse albedo (plastic, varnish),
+/// smooth or rough.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Coating {
     /// Index of refraction of the coating.
     pub ior: f32,
+    /// Microfacet roughness `alpha` of the coating's surface, in the
+    /// material's [`MicrofacetDistribution`] (0: smooth, a delta reflection).
+    pub roughness: f32,
+    /// Light scattered back and forth under the coating is tinted by the
+    /// base's colour at every bounce (Mitsuba's `nonlinear`: `kd / (1 − kd
+    /// F_dr)` instead of `kd / (1 − F_dr)`), which saturates colours.
+    pub nonlinear: bool,
+    /// The rough coating's transmittance table, computed from the fields
+    /// above on first use.
+    pub table: CoatingTableCell,
+}
+
+impl Coating {
+    /// A smooth, linear coating of index `ior`.
+    pub fn smooth(ior: f32) -> Self {
+        Self {
+            ior,
+            roughness: 0.0,
+            nonlinear: false,
+            table: CoatingTableCell::default(),
+        }
+    }
+}
+
+/// How much light a rough dielectric coating lets through, tabulated once
+/// per material (Mitsuba's `roughplastic`): the directional transmittance
+/// `t(μ)` of the coating seen from outside at cosine `μ`, at
+/// [`COATING_TABLE_SIZE`] cosines evenly spaced over [0, 1], and the
+/// hemispherical reflectance of its underside `F_dr`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoatingTable {
+    /// `t(μ_i)`, `μ_i = i / (COATING_TABLE_SIZE − 1)`.
+    pub transmittance: [f32; COATING_TABLE_SIZE],
+    /// Internal hemispherical reflectance of the coating.
+    pub internal_reflectance: f32,
+}
+
+/// Entries of [`CoatingTable::transmittance`] (Mitsuba's resolution).
+pub const COATING_TABLE_SIZE: usize = 64;
+
+impl CoatingTable {
+    /// `t(μ)` by linear interpolation between the entries.
+    #[inline]
+    pub fn transmittance_at(&self, mu: f32) -> f32 {
+        let x = mu.clamp(0.0, 1.0) * (COATING_TABLE_SIZE - 1) as f32;
+        let i = (x as usize).min(COATING_TABLE_SIZE - 2);
+        let w = x - i as f32;
+        self.transmittance[i] * (1.0 - w) + self.transmittance[i + 1] * w
+    }
+}
+
+/// A lazily filled, shared [`CoatingTable`]: the table depends only on the
+/// coating's index, roughness and distribution, so copies of a material
+/// share it, and two cells always compare equal (the table is derived data).
+#[derive(Clone, Default)]
+pub struct CoatingTableCell(pub std::sync::Arc<std::sync::OnceLock<CoatingTable>>);
+
+impl PartialEq for CoatingTableCell {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for CoatingTableCell {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("CoatingTableCell")
+    }
 }
 
 /// A named material.
@@ -318,7 +391,7 @@ impl Material {
                 roughness: scalar(&t.conductor_roughness, c.roughness).max(0.0),
                 ..c
             }),
-            coating: self.coating,
+            coating: self.coating.clone(),
             emission: self.emission_at(uv),
             one_sided: self.one_sided,
             microfacet: self.microfacet,
@@ -347,9 +420,9 @@ impl Material {
     }
 
     /// True when the Whitted integrator follows a reflected or refracted ray
-    /// from this surface (specular materials and clear coatings).
+    /// from this surface (specular materials and smooth clear coatings).
     pub fn spawns_secondary(&self) -> bool {
-        self.is_specular() || self.coating.is_some()
+        self.is_specular() || self.coating.as_ref().is_some_and(|c| c.roughness == 0.0)
     }
 
     /// True when the surface has a diffuse part that receives direct light

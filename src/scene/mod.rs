@@ -27,8 +27,8 @@ pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
-    AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution,
-    Mirror, NormalMap, ShadingModel,
+    AlphaMask, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
+    MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, ShadingModel, COATING_TABLE_SIZE,
 };
 pub use medium::Medium;
 

@@ -65,7 +65,7 @@
 
 use super::map::Photon;
 use crate::accel::{Accel, Hit};
-use crate::bsdf::{reflect, specular, DielectricInterface};
+use crate::bsdf::{reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, Transport};
 use crate::integrator::fog;
 use crate::integrator::medium::{Flight, MediumTracker, WaterVolume};
@@ -429,17 +429,15 @@ impl<'a> PhotonTracer<'a> {
             if path.bounces >= self.max_depth {
                 return Step::Done;
             }
+            let interface = DielectricInterface::of(ray.dir, &si, &d);
             let DielectricInterface {
-                n1,
-                n2,
-                reflected,
-                refracted,
-            } = DielectricInterface::at(ray.dir, &si, d.ior);
+                reflected, refracted, ..
+            } = interface;
             match refracted {
                 None => reflected,
                 Some((t, cos_i, cos_t)) => {
                     let model = d.fresnel.unwrap_or(FresnelModel::Schlick);
-                    if path.rng.f32() < specular::fresnel(model, n1, n2, cos_i, cos_t) {
+                    if path.rng.f32() < interface.reflectance(model, cos_i, cos_t) {
                         reflected
                     } else {
                         path.power *= d.tint;

@@ -98,8 +98,14 @@ impl Ctx<'_> {
                 };
                 let (tint, tint_tex) = self.colour_param(&d.tint, "tint", Vec3A::ONE, Some(1.0))?;
                 let (roughness, roughness_tex) = self.roughness(&d.roughness)?;
+                let thin = d.thin.as_ref().is_some_and(|t| *t.get_ref());
+                if thin && (roughness > 0.0 || roughness_tex.is_some()) {
+                    let at = d.thin.as_ref().expect("thin is set").span();
+                    return Err(self.invalid(at, "a thin dielectric is smooth: remove `roughness` or `thin`"));
+                }
                 (textures.dielectric_tint, textures.dielectric_roughness) = (tint_tex, roughness_tex);
                 Some(Dielectric {
+                    thin,
                     ior,
                     tint,
                     roughness,
@@ -177,7 +183,22 @@ impl Ctx<'_> {
                         x
                     }
                 };
-                Some(Coating { ior })
+                let roughness = match &s.get_ref().roughness {
+                    None => 0.0,
+                    Some(r) => {
+                        let x = self.number(r, "roughness")?;
+                        if !(0.0..=1.0).contains(&x) {
+                            return Err(self.invalid(r.span(), format!("coating `roughness` = {x} must be in [0, 1]")));
+                        }
+                        x
+                    }
+                };
+                Some(Coating {
+                    ior,
+                    roughness,
+                    nonlinear: s.get_ref().nonlinear.unwrap_or(false),
+                    table: Default::default(),
+                })
             }
         };
         let (emission, emission_tex) = self.colour_param(&m.emission, "emission", Vec3A::ZERO, None)?;

@@ -56,6 +56,22 @@ impl Builder<'_> {
                     tint,
                     roughness,
                     fresnel: Some(FresnelModel::Exact),
+                    thin: false,
+                });
+                m.one_sided = false;
+            }
+            "thindielectric" => {
+                let eta = interior_over_exterior(p, BK7)?;
+                unit_reflectance(p)?;
+                let (tint, tint_texture) =
+                    self.colour(p, "specular_transmittance", Vec3A::ONE, SpectrumUse::Reflectance)?;
+                textures.dielectric_tint = tint_texture;
+                m.dielectric = Some(Dielectric {
+                    ior: eta,
+                    tint,
+                    roughness: 0.0,
+                    fresnel: Some(FresnelModel::Exact),
+                    thin: true,
                 });
                 m.one_sided = false;
             }
@@ -65,16 +81,29 @@ impl Builder<'_> {
                 let roughness = self.rough_part(p, &mut m, &mut textures.conductor_roughness)?;
                 m.conductor = Some(Conductor { eta, k, roughness });
             }
-            "plastic" => {
+            "plastic" | "roughplastic" => {
                 let (c, t) = self.colour(p, "diffuse_reflectance", Vec3A::splat(0.5), SpectrumUse::Reflectance)?;
                 m.diffuse = c;
                 textures.diffuse = t;
                 unit_reflectance(p)?;
-                if p.boolean("nonlinear")?.unwrap_or(false) {
-                    return Err(p.error("`nonlinear` = true is not supported (caustic's plastic is Mitsuba's linear one)"));
-                }
+                let ior = interior_over_exterior(p, POLYPROPYLENE)?;
+                let roughness = if p.kind == "roughplastic" {
+                    let (alpha, texture, distribution) = self.roughness(p)?;
+                    if texture.is_some() {
+                        // Mitsuba's roughplastic takes a number: its
+                        // transmittance table is computed once.
+                        return Err(p.error("a textured `alpha` is not supported by roughplastic"));
+                    }
+                    m.microfacet = distribution;
+                    alpha
+                } else {
+                    0.0
+                };
                 m.coating = Some(Coating {
-                    ior: interior_over_exterior(p, POLYPROPYLENE)?,
+                    ior,
+                    roughness,
+                    nonlinear: p.boolean("nonlinear")?.unwrap_or(false),
+                    table: Default::default(),
                 });
             }
             "twosided" => {
@@ -115,7 +144,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided and normalmap"
                 )))
             }
         }
