@@ -362,6 +362,8 @@ fn documentation_covers_every_key() {
         format!("{cam}[materials.m]\nzzz = 1\n"),
         format!("{cam}[materials.m.mirror]\nzzz = 1\n"),
         format!("{cam}[materials.m.dielectric]\nzzz = 1\n"),
+        format!("{cam}[materials.m.blend]\nzzz = 1\n"),
+        format!("{cam}[materials.m.coating]\nzzz = 1\n"),
         format!("{cam}[[lights]]\nzzz = 1\n"),
         format!("{cam}[[objects]]\nzzz = 1\n"),
         "zzz = 1\n".to_string(),
@@ -405,4 +407,52 @@ fn documented_example_is_valid_up_to_its_mesh_file() {
     // And it is an example to follow: no parameter the integrator ignores.
     let warnings = caustic::integrator::lint::material_warnings(&scene);
     assert!(warnings.is_empty(), "{warnings:?}");
+}
+
+/// Blends copy the materials they name (blends first), and refuse unknown
+/// names, blends containing themselves and blends without a side.
+#[test]
+fn blends_name_other_materials() {
+    let head = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n";
+    let text = format!(
+        "{head}[materials.red]\ndiffuse = [0.8, 0.1, 0.1]\n\n[materials.gold]\nconductor = {{ metal = \"gold\", roughness = 0.2 }}\n\n\
+         [materials.mix]\nblend = {{ first = \"red\", second = \"gold\", weight = 0.25 }}\n\n\
+         [materials.veil]\nblend = {{ second = \"mix\", weight = 0.4 }}\n"
+    );
+    let scene = parse_scene(&text, Path::new("blend.toml")).unwrap();
+    let by_name = |n: &str| scene.materials.iter().find(|m| m.name == n).unwrap();
+    let mix = by_name("mix").blend.as_deref().unwrap();
+    assert_eq!(mix.weight, 0.25);
+    assert_eq!(mix.first.as_ref().unwrap().diffuse, by_name("red").diffuse);
+    assert!(mix.second.as_ref().unwrap().conductor.is_some());
+    let veil = by_name("veil").blend.as_deref().unwrap();
+    assert!(veil.first.is_none(), "a missing side is a hole");
+    assert!(
+        veil.second.as_ref().unwrap().blend.is_some(),
+        "the blend named is filled in first"
+    );
+    assert!(by_name("veil").has_holes() && !by_name("mix").has_holes());
+    for (body, message) in [
+        (
+            "[materials.a]\nblend = { first = \"b\" }\n",
+            "blend names `b`, which is not a material",
+        ),
+        (
+            "[materials.a]\nblend = { first = \"c\" }\n[materials.c]\nblend = { second = \"a\" }\n",
+            "contains itself",
+        ),
+        (
+            "[materials.a]\nblend = { weight = 0.5 }\n",
+            "needs `first`, `second` or both",
+        ),
+        (
+            "[materials.a]\ndiffuse = 0.5\n[materials.b]\nblend = { first = \"a\", weight = 2.0 }\n",
+            "in [0, 1]",
+        ),
+    ] {
+        let e = parse_scene(&format!("{head}{body}"), Path::new("blend.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(message) && e.contains("blend.toml:"), "{body}: {e}");
+    }
 }

@@ -106,6 +106,8 @@ enum Lobe<'a> {
     RoughConductor(RoughConductor),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
+    /// A hole: light continues straight through, unchanged.
+    PassThrough,
 }
 
 impl Lobe<'_> {
@@ -117,9 +119,11 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.eval(wo, wi),
             Lobe::Plastic(p) => p.eval(wo, wi),
             Lobe::RoughPlastic(p) => p.eval(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => {
-                Vec3A::ZERO
-            }
+            Lobe::Mirror(_)
+            | Lobe::SmoothDielectric(_)
+            | Lobe::ThinDielectric(_)
+            | Lobe::SmoothConductor(_)
+            | Lobe::PassThrough => Vec3A::ZERO,
         }
     }
 
@@ -131,7 +135,11 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.pdf(wo, wi),
             Lobe::Plastic(p) => p.pdf(wo, wi),
             Lobe::RoughPlastic(p) => p.pdf(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => 0.0,
+            Lobe::Mirror(_)
+            | Lobe::SmoothDielectric(_)
+            | Lobe::ThinDielectric(_)
+            | Lobe::SmoothConductor(_)
+            | Lobe::PassThrough => 0.0,
         }
     }
 
@@ -147,13 +155,22 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
             Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
+            Lobe::PassThrough => {
+                let mut s = BsdfSample::specular(-wo, Vec3A::splat(1.0 / wo.z.abs()), 1.0);
+                s.transmission = true;
+                (wo.z != 0.0).then_some(s)
+            }
         }
     }
 
     /// Probability that [`Lobe::sample`] returns a delta direction.
     fn delta_probability(&self, wo: Vec3A) -> f32 {
         match self {
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_) => 1.0,
+            Lobe::Mirror(_)
+            | Lobe::SmoothDielectric(_)
+            | Lobe::ThinDielectric(_)
+            | Lobe::SmoothConductor(_)
+            | Lobe::PassThrough => 1.0,
             Lobe::Plastic(p) => p.delta_probability(wo),
             _ => 0.0,
         }
@@ -163,7 +180,11 @@ impl Lobe<'_> {
     fn is_smooth_only(&self) -> bool {
         matches!(
             self,
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) | Lobe::SmoothConductor(_)
+            Lobe::Mirror(_)
+                | Lobe::SmoothDielectric(_)
+                | Lobe::ThinDielectric(_)
+                | Lobe::SmoothConductor(_)
+                | Lobe::PassThrough
         )
     }
 }
@@ -273,6 +294,29 @@ impl<'a> Bsdf<'a> {
         b
     }
 
+    /// The BSDF of a hole in a surface (a blend's empty side): light passes
+    /// straight through, a delta transmission of weight 1 that does not
+    /// bend the ray (Mitsuba's `null`).
+    pub fn pass_through(transport: Transport) -> Self {
+        let mut b = Self {
+            lobes: [(Lobe::PassThrough, 0.0); MAX_LOBES],
+            count: 0,
+            two_sided: false,
+            transport,
+        };
+        b.push(Lobe::PassThrough, 1.0);
+        b
+    }
+
+    /// The BSDF of whatever `m` resolves to at a shading point
+    /// ([`Material::resolve`]): its lobes, or a hole's.
+    pub fn for_resolved(m: Option<&'a Material>, default_fresnel: FresnelModel, transport: Transport) -> Self {
+        match m {
+            Some(m) => Self::for_material(m, default_fresnel, transport),
+            None => Self::pass_through(transport),
+        }
+    }
+
     fn push(&mut self, lobe: Lobe<'a>, weight: f32) {
         if weight > 0.0 && self.count < MAX_LOBES {
             self.lobes[self.count] = (lobe, weight);
@@ -308,7 +352,7 @@ impl<'a> Bsdf<'a> {
     pub fn has_delta_lobe(&self) -> bool {
         self.lobes()
             .iter()
-            .any(|(l, _)| l.is_smooth_only() || matches!(l, Lobe::Plastic(_)))
+            .any(|(l, _)| (l.is_smooth_only() && !matches!(l, Lobe::PassThrough)) || matches!(l, Lobe::Plastic(_)))
     }
 
     /// True when [`sample`](Self::sample) with the same `wo` and `uc` picks

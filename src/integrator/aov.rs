@@ -42,6 +42,15 @@ enum Step {
 }
 
 fn step(m: &Material) -> Step {
+    if let Some(b) = m.blend.as_deref() {
+        // The side that weighs more (the guides draw no random number);
+        // a hole lets the guide ray through, unchanged.
+        let side = if b.weight >= 0.5 { &b.second } else { &b.first };
+        return match side {
+            Some(m) => step(m),
+            None => Step::Refract(Vec3A::ONE, 1.0),
+        };
+    }
     let surface = (m.diffuse + m.specular).min(Vec3A::ONE);
     if let Some(d) = m.dielectric {
         return if d.thin {

@@ -291,7 +291,14 @@ impl<'a> PathTracer<'a> {
             if depth >= self.max_depth {
                 break;
             }
-            let bsdf = Bsdf::for_material(material, FresnelModel::Exact, Transport::Radiance);
+            // A blend scatters as one of its sides, chosen here (a hole
+            // lets the path through).
+            let scattering = if material.blend.is_some() {
+                material.resolve(si.uv, || rng.f32())
+            } else {
+                Some(std::borrow::Cow::Borrowed(material))
+            };
+            let bsdf = Bsdf::for_resolved(scattering.as_deref(), FresnelModel::Exact, Transport::Radiance);
             if bsdf.is_black() {
                 break;
             }

@@ -257,7 +257,15 @@ impl<'a> Whitted<'a> {
         } else {
             Vec3A::ZERO
         };
-        emitted + self.scatter(ray, &si, m, depth, ctx)
+        if m.blend.is_none() {
+            return emitted + self.scatter(ray, &si, m, depth, ctx);
+        }
+        // A blend scatters as one of its sides; a hole lets the ray through.
+        match m.resolve(si.uv, || ctx.rng.f32()) {
+            Some(side) => emitted + self.scatter(ray, &si, &side, depth, ctx),
+            None if self.can_bounce(depth) => emitted + self.trace_secondary(&si, ray.dir, depth, ctx),
+            None => emitted,
+        }
     }
 
     /// Radiance the surface at `si` reflects or transmits toward the ray's origin.

@@ -128,19 +128,7 @@ fn fingerprint_of(
     // from the defaults (the fingerprint of a scene that uses none of it is
     // the one before these existed).
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut text = String::new();
-        if m.one_sided {
-            text += " one-sided";
-        }
-        if m.microfacet != crate::scene::MicrofacetDistribution::Ggx {
-            text += &format!(" microfacet {}", m.microfacet.name());
-        }
-        if m.dielectric.is_some_and(|d| d.thin) {
-            text += " thin";
-        }
-        if let Some(c) = m.coating.as_ref().filter(|c| c.roughness > 0.0 || c.nonlinear) {
-            text += &format!(" coating roughness {:?} nonlinear {}", c.roughness, c.nonlinear);
-        }
+        let text = kind_text(m);
         if !text.is_empty() {
             field("material kind", format!("material {i}:{text}").as_bytes());
         }
@@ -211,6 +199,46 @@ fn fingerprint_of(
     }
     field("accel", format!("{accel:?} {accel_options}").as_bytes());
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A material's fields beyond [`encoding::Material`]'s, as text: empty
+/// for a material that uses none of them; a blend spells its sides whole.
+fn kind_text(m: &crate::scene::Material) -> String {
+    let mut text = String::new();
+    if m.one_sided {
+        text += " one-sided";
+    }
+    if m.microfacet != crate::scene::MicrofacetDistribution::Ggx {
+        text += &format!(" microfacet {}", m.microfacet.name());
+    }
+    if m.dielectric.is_some_and(|d| d.thin) {
+        text += " thin";
+    }
+    if let Some(c) = m.coating.as_ref().filter(|c| c.roughness > 0.0 || c.nonlinear) {
+        text += &format!(" coating roughness {:?} nonlinear {}", c.roughness, c.nonlinear);
+    }
+    if let Some(b) = m.blend.as_deref() {
+        let side = |s: &Option<crate::scene::Material>| match s {
+            None => "hole".to_string(),
+            Some(s) => {
+                let textures: String = s
+                    .textures
+                    .iter()
+                    .flat_map(|t| t.all())
+                    .map(|(name, t)| format!(" {name} {}", encoding::texture(t)))
+                    .collect();
+                format!("{{{:?}{}{textures}}}", encoding::Material::of(s), kind_text(s))
+            }
+        };
+        text += &format!(
+            " blend weight {:?} texture {} first {} second {}",
+            b.weight,
+            b.weight_texture.as_ref().map_or("none".into(), encoding::texture),
+            side(&b.first),
+            side(&b.second)
+        );
+    }
+    text
 }
 
 /// The fingerprint's own spelling of the materials: structs whose derived

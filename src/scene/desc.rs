@@ -333,6 +333,8 @@ pub struct MaterialDesc {
     pub conductor: Option<Spanned<ConductorDesc>>,
     /// `[materials.NAME.coating]`.
     pub coating: Option<Spanned<CoatingDesc>>,
+    /// `[materials.NAME.blend]`.
+    pub blend: Option<Spanned<BlendDesc>>,
     /// Emitted radiance: a colour, a number or a texture.
     pub emission: Option<Spanned<ParamDesc>>,
     /// Scale of `emission`.
@@ -391,6 +393,18 @@ pub struct ConductorDesc {
     pub k: Option<Spanned<Vec3Desc>>,
     /// GGX roughness (0: smooth).
     pub roughness: Option<Spanned<ParamDesc>>,
+}
+
+/// `[materials.NAME.blend]`: two materials of the scene mixed by a weight.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlendDesc {
+    /// The material that scatters with probability `1 − weight`; absent: a hole.
+    pub first: Option<Spanned<String>>,
+    /// The material that scatters with probability `weight`; absent: a hole.
+    pub second: Option<Spanned<String>>,
+    /// Weight of `second`, in [0, 1]: a number or a scalar texture.
+    pub weight: Option<Spanned<ParamDesc>>,
 }
 
 /// `[materials.NAME.coating]`.

@@ -213,6 +213,43 @@ pub struct Material {
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
     pub textures: Option<Box<MaterialTextures>>,
+    /// A mix of two materials (Mitsuba's `blendbsdf` and `mask`): when set,
+    /// this material scatters as one of the blend's sides, chosen per
+    /// shading point by [`Material::resolve`], and its own scattering
+    /// fields above are not read; its emission, normal map and alpha
+    /// cutout still apply.
+    pub blend: Option<Box<Blend>>,
+}
+
+/// Two sides mixed by a weight: the surface scatters as `(1 − w) · first +
+/// w · second`. A side that is `None` is a hole: light passes straight
+/// through it (Mitsuba's `null` BSDF, which `mask` mixes in).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Blend {
+    /// Weight `w` of `second`, in [0, 1].
+    pub weight: f32,
+    /// Replaces `weight` at shading points (a scalar texture).
+    pub weight_texture: Option<Texture>,
+    /// Scatters with probability `1 − w`.
+    pub first: Option<Material>,
+    /// Scatters with probability `w`.
+    pub second: Option<Material>,
+}
+
+impl Blend {
+    /// `w` at texture coordinates `uv`, clamped to [0, 1].
+    #[inline]
+    pub fn weight_at(&self, uv: Vec2) -> f32 {
+        self.weight_texture
+            .as_ref()
+            .map_or(self.weight, |t| t.eval_scalar(uv))
+            .clamp(0.0, 1.0)
+    }
+
+    /// The sides that are materials.
+    pub fn sides(&self) -> impl Iterator<Item = &Material> {
+        self.first.iter().chain(self.second.iter())
+    }
 }
 
 /// A tangent-space normal map (`n = 2·rgb − 1`, linear data), on the
@@ -334,7 +371,76 @@ impl Material {
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
             textures: None,
+            blend: None,
         }
+    }
+
+    /// The material that scatters at texture coordinates `uv`: itself (its
+    /// textures looked up, [`at`](Self::at)), or for a blend one of its
+    /// sides, chosen with the blend's weight by the number `u()` (drawn only
+    /// for blends, so other materials use no random number), or `None`
+    /// where the chosen side is a hole. Nested blends reuse what is left of
+    /// the same number.
+    pub fn resolve(&self, uv: Vec2, u: impl FnOnce() -> f32) -> Option<Cow<'_, Material>> {
+        let Some(blend) = self.blend.as_deref() else {
+            return Some(self.at(uv));
+        };
+        let mut u = u();
+        let mut blend = blend;
+        loop {
+            let w = blend.weight_at(uv);
+            let side = if u < w {
+                u = if w > 0.0 { u / w } else { 0.0 };
+                &blend.second
+            } else {
+                u = if w < 1.0 { (u - w) / (1.0 - w) } else { 0.0 };
+                &blend.first
+            };
+            match side.as_ref() {
+                None => return None,
+                Some(m) => match m.blend.as_deref() {
+                    Some(inner) => blend = inner,
+                    None => return Some(m.at(uv)),
+                },
+            }
+        }
+    }
+
+    /// This material and every material of its blends, nested ones included.
+    pub fn layers(&self) -> Vec<&Material> {
+        let mut out = vec![self];
+        let mut i = 0;
+        while i < out.len() {
+            if let Some(b) = out[i].blend.as_deref() {
+                out.extend(b.sides());
+            }
+            i += 1;
+        }
+        out
+    }
+
+    /// True when some layer of a blend is a hole.
+    pub fn has_holes(&self) -> bool {
+        self.layers()
+            .iter()
+            .filter_map(|m| m.blend.as_deref())
+            .any(|b| b.first.is_none() || b.second.is_none())
+    }
+
+    /// True when shading reads texture coordinates or the tangent, here or
+    /// in a blend's layers.
+    #[inline]
+    pub fn uses_uv(&self) -> bool {
+        let own = self.textures.as_deref().is_some_and(|t| t.uses_uv());
+        if self.blend.is_none() {
+            return own;
+        }
+        self.layers().iter().any(|m| {
+            m.textures.as_deref().is_some_and(|t| t.uses_uv())
+                || m.blend
+                    .as_deref()
+                    .is_some_and(|b| b.weight_texture.as_ref().is_some_and(|t| !t.is_constant()))
+        })
     }
 
     /// True when surfaces with this material emit light somewhere.
@@ -396,12 +502,16 @@ impl Material {
             one_sided: self.one_sided,
             microfacet: self.microfacet,
             textures: None,
+            blend: self.blend.clone(),
         }
     }
 
     /// True when rays continue through this surface (mirror or dielectric):
     /// such objects cast caustics and need secondary rays.
     pub fn is_specular(&self) -> bool {
+        if let Some(b) = self.blend.as_deref() {
+            return b.sides().any(Material::is_specular);
+        }
         let none = MaterialTextures::default();
         let t = self.textures.as_deref().unwrap_or(&none);
         let smooth_somewhere = |tex: &Option<Texture>, value: f32| match tex {
@@ -422,12 +532,18 @@ impl Material {
     /// True when the Whitted integrator follows a reflected or refracted ray
     /// from this surface (specular materials and smooth clear coatings).
     pub fn spawns_secondary(&self) -> bool {
+        if let Some(b) = self.blend.as_deref() {
+            return b.first.is_none() || b.second.is_none() || b.sides().any(Material::spawns_secondary);
+        }
         self.is_specular() || self.coating.as_ref().is_some_and(|c| c.roughness == 0.0)
     }
 
     /// True when the surface has a diffuse part that receives direct light
     /// and photons.
     pub fn is_diffuse(&self) -> bool {
+        if let Some(b) = self.blend.as_deref() {
+            return b.sides().any(Material::is_diffuse);
+        }
         let t = self.textures.as_deref();
         let diffuse = t
             .and_then(|t| t.diffuse.as_ref())

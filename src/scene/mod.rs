@@ -27,7 +27,7 @@ pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
-    AlphaMask, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
+    AlphaMask, Blend, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
     MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, ShadingModel, COATING_TABLE_SIZE,
 };
 pub use medium::Medium;
@@ -400,7 +400,7 @@ impl Scene {
         let textures = material.textures.as_deref();
         let normal_map = textures.and_then(|t| t.normal_map.as_ref());
         // The parametrisation costs trigonometry on spheres: only when read.
-        let wants_uv = textures.is_some_and(|t| t.uses_uv());
+        let wants_uv = material.uses_uv();
         // The mesh's interpolated tangent, when it has tangents and a normal map reads them.
         let mut tangent: Option<Vec4> = None;
         let (p, p_error, ng, ns, uv, dpdu, dpdv) = match &object.shape {

@@ -424,7 +424,21 @@ impl<'a> PhotonTracer<'a> {
             path.power *= fog::transmittance(m, &ray, hit.t);
         }
         let si = self.scene.surface_interaction(&ray, &hit);
-        let m = &*self.scene.materials[si.material as usize].at(si.uv);
+        let wrapper = &*self.scene.materials[si.material as usize].at(si.uv);
+        // A blend scatters as one of its sides; a hole lets the photon through.
+        let side = if wrapper.blend.is_some() {
+            wrapper.resolve(si.uv, || path.rng.f32())
+        } else {
+            Some(std::borrow::Cow::Borrowed(wrapper))
+        };
+        let Some(m) = side.as_deref() else {
+            if path.bounces >= self.max_depth {
+                return Step::Done;
+            }
+            path.bounces += 1;
+            path.ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, ray.dir), ray.dir);
+            return Step::Continue;
+        };
         let dir = if let Some(d) = m.dielectric {
             if path.bounces >= self.max_depth {
                 return Step::Done;
@@ -535,7 +549,12 @@ impl PhotonTracer<'_> {
         };
         let si = self.scene.surface_interaction(&ray, &hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
-        let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance);
+        let side = if m.blend.is_some() {
+            m.resolve(si.uv, || path.rng.f32())
+        } else {
+            Some(std::borrow::Cow::Borrowed(m))
+        };
+        let bsdf = Bsdf::for_resolved(side.as_deref(), FresnelModel::Exact, Transport::Importance);
         if bsdf.is_black() {
             return Step::Done;
         }

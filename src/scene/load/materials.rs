@@ -9,7 +9,7 @@ use crate::scene::desc::{FresnelName, MaterialDesc, ModelName, ParamDesc, Spanne
 use crate::scene::material::{AlphaMask, MaterialTextures, NormalMap};
 use crate::scene::metals;
 use crate::scene::{
-    Coating, Conductor, Dielectric, FresnelModel, Material, MicrofacetDistribution, Mirror, ShadingModel,
+    Blend, Coating, Conductor, Dielectric, FresnelModel, Material, MicrofacetDistribution, Mirror, ShadingModel,
 };
 use crate::texture::Texture;
 use std::collections::BTreeMap;
@@ -32,7 +32,80 @@ impl Ctx<'_> {
             index.insert(name.clone(), materials.len() as u32);
             materials.push(self.material(name, m)?);
         }
+        // Blends take copies of the materials they name, blends among them,
+        // so they are filled in once every material exists.
+        let mut done: Vec<bool> = descs.values().map(|m| m.blend.is_none()).collect();
+        for i in 0..materials.len() {
+            self.fill_blend(i, descs, &index, &mut materials, &mut done, &mut Vec::new())?;
+        }
         Ok((materials, index))
+    }
+
+    /// Fills in the blend of material `i` (and first of the blends it
+    /// names), refusing unknown names and blends that contain themselves.
+    fn fill_blend(
+        &self,
+        i: usize,
+        descs: &BTreeMap<String, MaterialDesc>,
+        index: &BTreeMap<String, u32>,
+        materials: &mut [Material],
+        done: &mut [bool],
+        stack: &mut Vec<usize>,
+    ) -> Result<(), SceneError> {
+        if done[i] {
+            return Ok(());
+        }
+        let desc = descs.values().nth(i).expect("one desc per material");
+        let b = desc.blend.as_ref().expect("not done: a blend").get_ref();
+        stack.push(i);
+        let mut side = |s: &Option<Spanned<String>>| -> Result<Option<Material>, SceneError> {
+            let Some(s) = s else { return Ok(None) };
+            let j = *index.get(s.get_ref()).ok_or_else(|| {
+                self.invalid(
+                    s.span(),
+                    format!(
+                        "blend names `{}`, which is not a material; the materials are: {}",
+                        s.get_ref(),
+                        index.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                )
+            })? as usize;
+            if stack.contains(&j) {
+                return Err(self.invalid(s.span(), format!("blend `{}` contains itself", s.get_ref())));
+            }
+            self.fill_blend(j, descs, index, materials, done, stack)?;
+            let m = materials[j].clone();
+            if m.textures
+                .as_ref()
+                .is_some_and(|t| t.normal_map.is_some() || t.alpha.is_some())
+            {
+                return Err(self.invalid(
+                    s.span(),
+                    format!(
+                        "`{}` has a normal map or an alpha cutout: give them to the blend itself",
+                        s.get_ref()
+                    ),
+                ));
+            }
+            Ok(Some(m))
+        };
+        let first = side(&b.first)?;
+        let second = side(&b.second)?;
+        let at = desc.blend.as_ref().expect("a blend").span();
+        if first.is_none() && second.is_none() {
+            return Err(self.invalid(at, "a blend needs `first`, `second` or both (a missing side is a hole)"));
+        }
+        let (weight, weight_texture) =
+            self.scalar_param(&b.weight, "weight", 0.5, ("in [0, 1]", |w| (0.0..=1.0).contains(&w)))?;
+        materials[i].blend = Some(Box::new(Blend {
+            weight,
+            weight_texture,
+            first,
+            second,
+        }));
+        done[i] = true;
+        stack.pop();
+        Ok(())
     }
 
     fn material(&self, name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
@@ -293,6 +366,7 @@ impl Ctx<'_> {
             emission,
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
+            blend: None,
         })
     }
 

@@ -10,7 +10,7 @@ use crate::scene::conductors::CONDUCTORS;
 use crate::scene::ior::{ior_names, named_ior};
 use crate::scene::load::SceneError;
 use crate::scene::{
-    Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution, NormalMap,
+    Blend, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution, NormalMap,
 };
 
 /// Mitsuba's default interior index of dielectrics (BK7).
@@ -106,6 +106,45 @@ impl Builder<'_> {
                     table: Default::default(),
                 });
             }
+            "blendbsdf" | "mask" => {
+                let (weight_name, default) = if p.kind == "mask" {
+                    ("opacity", 0.5)
+                } else {
+                    ("weight", 0.5)
+                };
+                let (weight, weight_texture) = self.scalar(p, weight_name, default)?;
+                if weight_texture.is_none() && !(0.0..=1.0).contains(&weight) {
+                    return Err(p.error(format!("`{weight_name}` = {weight} must be in [0, 1]")));
+                }
+                let inner = p.children_of("bsdf")?;
+                let wanted = if p.kind == "mask" { 1 } else { 2 };
+                if inner.len() != wanted {
+                    return Err(p.error(format!("takes {wanted} nested <bsdf>, not {}", inner.len())));
+                }
+                let mut sides = Vec::new();
+                for (b, _) in &inner {
+                    let side = self.bsdf(b)?;
+                    if side.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) {
+                        return Err(b.error(
+                            "a normal map inside a blend is not supported (put the normalmap around the blend)",
+                        ));
+                    }
+                    sides.push(side);
+                }
+                let mut sides = sides.into_iter();
+                let (first, second) = if p.kind == "mask" {
+                    // opacity · bsdf + (1 − opacity) · null
+                    (None, sides.next())
+                } else {
+                    (sides.next(), sides.next())
+                };
+                m.blend = Some(Box::new(Blend {
+                    weight,
+                    weight_texture,
+                    first,
+                    second,
+                }));
+            }
             "twosided" => {
                 let inner = p.children_of("bsdf")?;
                 let [(inner, _)] = <[_; 1]>::try_from(inner).map_err(|v: Vec<_>| {
@@ -115,7 +154,7 @@ impl Builder<'_> {
                     ))
                 })?;
                 let mut m = self.bsdf(&inner)?;
-                m.one_sided = false;
+                two_sided(&mut m);
                 if let Some(id) = p.element.attr("id") {
                     m.name = id.to_string();
                 }
@@ -144,7 +183,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, twosided and normalmap"
                 )))
             }
         }
@@ -198,6 +237,16 @@ impl Builder<'_> {
         let (alpha, texture) = self.scalar(p, "alpha", 0.1)?;
         check_alpha(p, alpha)?;
         Ok((alpha, texture, distribution))
+    }
+}
+
+/// Makes `m` and every side of its blends scatter on both sides.
+fn two_sided(m: &mut Material) {
+    m.one_sided = false;
+    if let Some(b) = m.blend.as_deref_mut() {
+        for side in [&mut b.first, &mut b.second].into_iter().flatten() {
+            two_sided(side);
+        }
     }
 }
 

@@ -50,7 +50,18 @@ impl Builder<'_> {
                 Ok((c.x, None))
             }
             Some(ColourParam::Texture(t)) => {
-                let texture = self.texture(&t)?;
+                let texture = match self.texture(&t)? {
+                    // Mitsuba 3's checkerboard gives `color1` where its
+                    // colour lookup gives `color0` when a scalar is read
+                    // (`eval_1`), and the other way round: read as Mitsuba
+                    // reads it.
+                    Texture::Checkerboard(c) => Texture::Checkerboard(crate::texture::Checkerboard {
+                        colour0: c.colour1,
+                        colour1: c.colour0,
+                        ..c
+                    }),
+                    texture => texture,
+                };
                 Ok((texture.max_value().x, Some(texture)))
             }
         }
