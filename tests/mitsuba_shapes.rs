@@ -333,6 +333,52 @@ fn instances_share_their_group_and_compose_transforms() {
     assert!((si.p - Vec3A::new(10.0, 0.0, 2.0)).length() < 1e-5, "{}", si.p);
 }
 
+/// A mirroring instance keeps the faces' fronts (Mitsuba moves the
+/// group's normals as normals) and shares the mesh even with
+/// `face_normals`; a mirroring `to_world` of the shape itself reverses the
+/// winding Mitsuba orients face normals by, as before.
+#[test]
+fn a_mirroring_instance_keeps_face_normals() {
+    let dir = tempfile::tempdir().unwrap();
+    // A triangle facing +z by its winding, lying over the origin.
+    write(dir.path(), "tri.obj", "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
+    let body = r#"<shape type="shapegroup" id="g">
+            <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="face_normals" value="true"/></shape>
+        </shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><translate z="1"/></transform></shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><scale x="-1"/><translate x="3"/></transform></shape>
+        <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="face_normals" value="true"/>
+            <transform name="to_world"><scale x="-1"/><translate x="-3"/></transform></shape>"#;
+    let path = write(dir.path(), "scene.xml", &scene_text(body));
+    let scene = load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}")).scene;
+    let mesh = |i: usize| match &scene.objects[i].shape {
+        Shape::Mesh { mesh, .. } => *mesh,
+        _ => panic!(),
+    };
+    assert_eq!(mesh(0), mesh(1), "the instances share the mesh");
+    assert_ne!(mesh(0), mesh(2), "the mirrored shape's own mesh is flipped");
+    for (x, z) in [(0.0, 1.0), (3.0, 0.0), (-3.0, 0.0)] {
+        let si = shade(&scene, [x, 0.0, 5.0], [0.0, 0.0, -1.0]);
+        assert!((si.p.z - z).abs() < 1e-6, "{}", si.p);
+        let expected = if x < 0.0 { -1.0 } else { 1.0 };
+        assert_eq!(si.ng.z, expected, "at x = {x}");
+    }
+}
+
+/// Mitsuba gives a shape without a BSDF a grey diffuse, a black one when
+/// it emits (`Shape`'s constructor).
+#[test]
+fn an_emitting_shape_without_a_bsdf_is_black() {
+    let scene = load(
+        r#"<shape type="disk"><emitter type="area"><rgb name="radiance" value="2, 2, 2"/></emitter></shape>
+           <shape type="cylinder"/>"#,
+    );
+    let lamp = &scene.materials[scene.objects[0].material as usize];
+    assert_eq!((lamp.diffuse, lamp.emission), (Vec3A::ZERO, Vec3A::splat(2.0)));
+    let tube = &scene.materials[scene.objects[1].material as usize];
+    assert_eq!(tube.diffuse, Vec3A::splat(0.5));
+}
+
 #[test]
 fn what_cannot_be_mapped_is_refused_at_its_place() {
     let group = |member: &str| {

@@ -1,6 +1,6 @@
 //! `<shape>`: obj, ply, serialized, rectangle, cube, sphere, disk and
 //! cylinder, each with its BSDF (Mitsuba's default: a one-sided diffuse of
-//! reflectance 0.5) and a nested `area` emitter, which makes the shape emit
+//! reflectance 0.5, black on an emitting shape) and a nested `area` emitter, which makes the shape emit
 //! and still reflect; and `shapegroup` + `instance`: each instance adds the
 //! group's shapes as objects with the composed `to_world`, sharing the
 //! group's meshes and materials (one mesh in memory however many instances).
@@ -149,15 +149,19 @@ impl Builder<'_> {
             None => name,
         };
         let flip_normals = p.boolean("flip_normals")?.unwrap_or(false);
-        let to_world = *parent * p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let own_to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let to_world = *parent * own_to_world;
         let shape = match p.kind {
             "obj" | "ply" | "serialized" => {
                 let file = p.string("filename")?.ok_or_else(|| p.error("`filename` is required"))?;
                 let at = p.take("filename").map_or(p.origin(), |e| &e.origin).clone();
                 let face_normals = p.boolean("face_normals")?.unwrap_or(false);
-                // Mitsuba orients face normals by the world-space winding, which
-                // a mirroring `to_world` reverses; caustic transforms the object's.
-                let mirrored = to_world.determinant() < 0.0;
+                // Mitsuba orients face normals by the winding of the mesh as
+                // its own `to_world` places it, which a mirroring one
+                // reverses; caustic transforms the object's. An instance's
+                // transform moves the normals as normals (its mirror keeps
+                // their side), so only the shape's own counts.
+                let mirrored = own_to_world.determinant() < 0.0;
                 let flip_normals = flip_normals != (face_normals && mirrored);
                 let shape_index = match p.kind {
                     "serialized" => {
@@ -323,7 +327,10 @@ impl Builder<'_> {
         let mut material = match &bsdf {
             Some(b) => self.bsdf(b)?,
             None => {
-                let mut m = Material::diffuse("default", Vec3A::splat(0.5));
+                // Mitsuba's `Shape` gives a shape without a BSDF a diffuse
+                // one of reflectance 0.5, or 0 when it emits.
+                let reflectance = if emitters.is_empty() { 0.5 } else { 0.0 };
+                let mut m = Material::diffuse("default", Vec3A::splat(reflectance));
                 m.ambient = Vec3A::ZERO;
                 m.one_sided = true;
                 m
