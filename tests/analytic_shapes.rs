@@ -541,3 +541,66 @@ fn toml_keys_are_read_and_checked() {
         assert!(e.contains(message) && e.contains("shapes.toml:"), "{object}: {e}");
     }
 }
+
+/// An alpha mask cuts holes in disks and cylinders on every accelerator:
+/// a ray meets the disk exactly where the mask, read at the disk's texture
+/// coordinates `(r, φ/2π)`, is opaque; through a hole in a cylinder's near
+/// wall it meets the far wall (or nothing, where that is a hole too).
+#[test]
+fn alpha_masks_cut_disks_and_cylinders() {
+    let scene = load(&format!(
+        "{HEAD}[materials.holes]\ndiffuse = 0.5\n\
+         alpha = {{ type = \"checkerboard\", colour0 = 0.0, colour1 = 1.0, scale = 4.0 }}\n\
+         [[objects]]\ntype = \"disk\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"holes\"\n\
+         [[objects]]\ntype = \"cylinder\"\np0 = [5.0, 0.0, -1.0]\np1 = [5.0, 0.0, 1.0]\nradius = 1.0\nmaterial = \"holes\""
+    ));
+    let material = &scene.materials[scene.objects[0].material as usize];
+    let mask = material.textures.as_ref().unwrap().alpha.clone().unwrap();
+    let Shape::Disk(disk) = scene.objects[0].shape.clone() else {
+        panic!()
+    };
+    let Shape::Cylinder(tube) = scene.objects[1].shape.clone() else {
+        panic!()
+    };
+    let mut kinds = vec![AccelKind::Brute, AccelKind::KdTree];
+    if cfg!(feature = "embree") {
+        kinds.push(AccelKind::Embree);
+    }
+    let mut rng = Rng::new(4, Domain::Photon, 0, 0);
+    for kind in kinds {
+        let a = accel::build(&scene, kind, &AccelOptions::default()).unwrap();
+        let (mut holes, mut solid, mut far) = (0, 0, 0);
+        for _ in 0..2_000 {
+            // Down onto the disk.
+            let (x, y) = (rng.f32() * 2.0 - 1.0, rng.f32() * 2.0 - 1.0);
+            if x * x + y * y < 0.98 {
+                let ray = Ray::new(Vec3A::new(x, y, 3.0), -Vec3A::Z);
+                let opaque = mask.opaque_at(disk.uv(x, y).0);
+                let hit = a.intersect(&ray, f32::INFINITY);
+                assert_eq!(hit.is_some(), opaque, "{}: disk at ({x}, {y})", kind.name());
+                assert_eq!(a.occluded(&ray, 10.0), opaque);
+                if opaque {
+                    solid += 1;
+                } else {
+                    holes += 1;
+                }
+            }
+            // Across the tube, along −x.
+            let (y, z) = (rng.f32() * 1.6 - 0.8, rng.f32() * 1.8 - 0.9);
+            let ray = Ray::new(Vec3A::new(10.0, y, z), -Vec3A::X);
+            let near = Vec3A::new(5.0 + (1.0 - y * y).sqrt(), y, z);
+            let back = Vec3A::new(5.0 - (1.0 - y * y).sqrt(), y, z);
+            let (near_opaque, far_opaque) = (mask.opaque_at(tube.uv(near).0), mask.opaque_at(tube.uv(back).0));
+            let hit = a.intersect(&ray, f32::INFINITY).map(|h| ray.at(h.t));
+            match hit {
+                Some(p) if near_opaque => assert!((p - near).length() < 1e-4, "{}: {p}", kind.name()),
+                Some(p) => {
+                    assert!(far_opaque && (p - back).length() < 1e-4, "{}: {p}", kind.name());
+                    far += 1;
+                }
+                None => assert!(!near_opaque && !far_opaque, "{}: ({y}, {z})", kind.name()),
+            }
+        }
+        assert!(holes > 100 && solid > 100 && far > 50, "{holes} {solid} {far}");
+    }
+}

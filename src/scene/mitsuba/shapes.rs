@@ -1,9 +1,10 @@
 //! `<shape>`: obj, ply, serialized, rectangle, cube, sphere, disk and
 //! cylinder, each with its BSDF (Mitsuba's default: a one-sided diffuse of
-//! reflectance 0.5, black on an emitting shape) and a nested `area` emitter, which makes the shape emit
-//! and still reflect; and `shapegroup` + `instance`: each instance adds the
-//! group's shapes as objects with the composed `to_world`, sharing the
-//! group's meshes and materials (one mesh in memory however many instances).
+//! reflectance 0.5, black on an emitting shape) and a nested `area`
+//! emitter, which makes the shape emit and still reflect; and `shapegroup`
+//! with `instance`: each instance adds the group's shapes as objects with the
+//! composed `to_world`, sharing the group's meshes and materials (one mesh
+//! in memory however many instances).
 
 use super::emitters::affine;
 use super::props::Plugin;
