@@ -416,6 +416,12 @@ fn what_cannot_be_mapped_is_refused_at_its_place() {
             "unevenly across its axis",
         ),
         (
+            r#"<shape type="shapegroup" id="g"><shape type="cylinder"/></shape>
+               <shape type="instance"><ref id="g"/><transform name="to_world"><scale y="2"/></transform></shape>"#
+                .to_string(),
+            "the instance's `to_world` shears the cylinder or scales it unevenly",
+        ),
+        (
             r#"<shape type="cylinder"><point name="p1" value="0, 0, 0"/></shape>"#.to_string(),
             "`p0` and `p1` coincide",
         ),
@@ -450,5 +456,18 @@ fn what_cannot_be_mapped_is_refused_at_its_place() {
     assert!(
         stderr.contains("bad.xml:") && stderr.contains("instancing of emitters"),
         "{stderr}"
+    );
+    // `caustic info` counts the disks and cylinders.
+    let good = write(
+        dir.path(),
+        "good.xml",
+        &scene_text(r#"<shape type="disk"/><shape type="cylinder"/><shape type="cylinder"/>"#),
+    );
+    let out = common::cli::caustic(&["info", good.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        stdout.contains("objects     3 (0 mesh instances, 1 disk, 2 cylinders)"),
+        "{stdout}"
     );
 }

@@ -4,9 +4,9 @@
 //!   the objects that instance the mesh. Built with Wald & Havran's O(N log N)
 //!   event-sorting SAH build with perfect splits ([`build`]).
 //! * Top level: a KD-tree of the same kind over the world bounds of the
-//!   objects (mesh instances, spheres, quads); an object straddling a plane is
-//!   referenced by both sides, and a small mailbox avoids testing it twice in
-//!   one query.
+//!   objects (mesh instances, spheres, quads, disks, cylinders); an object
+//!   straddling a plane is referenced by both sides, and a small mailbox
+//!   avoids testing it twice in one query.
 //! * Traversal: iterative, front to back for closest hits and back to
 //!   front for occlusion, fixed stack (pbrt-v3
 //!   `KdTreeAccel::Intersect`), rays moved into object space with

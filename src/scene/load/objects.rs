@@ -1,6 +1,6 @@
-//! The `[[objects]]`: spheres, quads, disks, cylinders, mesh instances (their files resolved
-//! and loaded once each), water surfaces, and the `[medium]` that fills the
-//! water.
+//! The `[[objects]]`: spheres, quads, disks, cylinders, mesh instances
+//! (their files resolved and loaded once each), water surfaces, and the
+//! `[medium]` that fills the water.
 
 use super::ctx::Ctx;
 use super::error::SceneError;

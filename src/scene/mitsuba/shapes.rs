@@ -285,7 +285,7 @@ impl Builder<'_> {
                         .ok_or_else(|| p.error("`to_world` flattens the disk to a line"))?,
                 )
             }
-            "cylinder" => Shape::Cylinder(cylinder(p, &to_world, flip_normals)?),
+            "cylinder" => Shape::Cylinder(cylinder(p, &to_world, flip_normals, instance.is_some())?),
             "shapegroup" | "instance" => return Err(p.error("nested instancing is not permitted (nor in Mitsuba)")),
             "bsplinecurve" | "linearcurve" | "sdfgrid" => {
                 return Err(p.error(format!("the shape `{}` is not supported yet", p.kind)))
@@ -370,7 +370,7 @@ impl Builder<'_> {
 /// power, is that of a round tube), so caustic refuses them. The normals
 /// point outward whether or not the map mirrors (Mitsuba flips them back),
 /// inward with `flip_normals`.
-fn cylinder(p: &Plugin, to_world: &Mat4, flip_normals: bool) -> Result<Cylinder, SceneError> {
+fn cylinder(p: &Plugin, to_world: &Mat4, flip_normals: bool, in_instance: bool) -> Result<Cylinder, SceneError> {
     let radius = p.float_checked("radius", 1.0, "> 0", |r| r > 0.0)?;
     let p0 = p.vector("p0")?.unwrap_or(Vec3::ZERO);
     let p1 = p.vector("p1")?.unwrap_or(Vec3::Z);
@@ -391,9 +391,11 @@ fn cylinder(p: &Plugin, to_world: &Mat4, flip_normals: bool) -> Result<Cylinder,
         && x.dot(z).abs() <= tol * length
         && y.dot(z).abs() <= tol * length;
     if !(round && r > 0.0 && length > 0.0) {
-        return Err(p.error(
-            "`to_world` shears the cylinder or scales it unevenly across its axis (Mitsuba warns and renders it inconsistently): not supported",
-        ));
+        return Err(p.error(if in_instance {
+            "the instance's `to_world` shears the cylinder or scales it unevenly across its axis: an elliptic tube is not supported"
+        } else {
+            "`to_world` shears the cylinder or scales it unevenly across its axis (Mitsuba warns and renders it inconsistently): not supported"
+        }));
     }
     let axis = z / length;
     let s = (x - axis * axis.dot(x)).normalize();
