@@ -422,7 +422,8 @@ fn film_sum(scene: &Scene) -> (Vec<f32>, f64) {
 /// each floor point with the view factor of a parallel disk at horizontal
 /// offset ρ: `E = (π L / 2)(1 − (h² + ρ² − r²) / √((h² + ρ² + r²)² − 4 r² ρ²))`.
 /// The path integrator finds it by light sampling and by BSDF sampling
-/// (MIS), so both must see the disk with the same pdf.
+/// (MIS), so both must see the disk with the same pdf; the Whitted
+/// integrator by its stratified shadow samples.
 #[test]
 fn the_path_integrator_sees_an_emitting_disk() {
     let (r, h) = (0.3f32, 1.0f32);
@@ -445,6 +446,12 @@ fn the_path_integrator_sees_an_emitting_disk() {
         }
     }
     assert!((sum / expected - 1.0).abs() < 0.01, "{sum} against {expected}");
+    // The Whitted integrator's direct light from emitting objects, too.
+    let mut whitted = scene.clone();
+    whitted.settings.integrator = caustic::scene::IntegratorKind::Whitted;
+    whitted.settings.max_depth = None;
+    let (_, sum) = film_sum(&whitted);
+    assert!((sum / expected - 1.0).abs() < 0.01, "Whitted: {sum} against {expected}");
     // Turned away from the floor, it lights nothing.
     let away = floor_scene(&format!(
         "[[objects]]\ntype = \"disk\"\ncenter = [{}, {h}, 0.0]\nradius = {r}\nnormal = [0.0, 1.0, 0.0]\nmaterial = \"lamp\"",
