@@ -247,7 +247,7 @@ fn what_caustic_does_not_read_is_refused_at_its_place() {
             r#"<shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#,
             "caustic reads beckmann, ggx",
         ),
-        (r#"<shape type="disk"/>"#, "the shape `disk` is not supported"),
+        (r#"<shape type="sdfgrid"/>"#, "the shape `sdfgrid` is not supported"),
         (r#"<emitter type="area"/>"#, "belongs inside a <shape>"),
         (
             r#"<shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="glass"/></bsdf></shape>"#,

@@ -16,6 +16,8 @@ pub struct BruteForce {
 enum BruteObject {
     Sphere(crate::scene::Sphere),
     Quad(crate::scene::Quad),
+    Disk(crate::scene::Disk),
+    Cylinder(crate::scene::Cylinder),
     Mesh(Arc<Mesh>, crate::math::Transform),
 }
 
@@ -28,6 +30,8 @@ impl BruteForce {
             .map(|o| match &o.shape {
                 Shape::Sphere(s) => BruteObject::Sphere(*s),
                 Shape::Quad(q) => BruteObject::Quad(*q),
+                Shape::Disk(d) => BruteObject::Disk(*d),
+                Shape::Cylinder(c) => BruteObject::Cylinder(*c),
                 Shape::Mesh { mesh, transform, .. } => {
                     BruteObject::Mesh(scene.meshes[*mesh as usize].clone(), *transform)
                 }
@@ -74,6 +78,38 @@ impl BruteForce {
                             prim: 0,
                             u,
                             v,
+                        });
+                        t_max = t;
+                    }
+                }
+                BruteObject::Disk(d) => {
+                    let h = match &self.cutouts {
+                        Some(c) => c.disk(instance, d, ray, t_max),
+                        None => d.intersect(ray, t_max),
+                    };
+                    if let Some((t, u, v)) = h {
+                        best = Some(Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u,
+                            v,
+                        });
+                        t_max = t;
+                    }
+                }
+                BruteObject::Cylinder(cyl) => {
+                    let t = match &self.cutouts {
+                        Some(c) => c.cylinder(instance, cyl, ray, t_max),
+                        None => cyl.intersect(ray, t_max),
+                    };
+                    if let Some(t) = t {
+                        best = Some(Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u: 0.0,
+                            v: 0.0,
                         });
                         t_max = t;
                     }

@@ -2,7 +2,8 @@
 //!
 //! Both real backends (Embree and the in-house KD-tree) are two-level: one
 //! bottom-level structure per distinct mesh, in object space, and a top level
-//! over the objects (mesh instances with their transforms, spheres, quads).
+//! over the objects (mesh instances with their transforms, spheres, quads,
+//! disks, cylinders).
 //! `brute` tests everything and is the oracle of the tests.
 
 pub mod brute;

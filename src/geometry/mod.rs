@@ -1,5 +1,6 @@
 //! Geometry vocabulary shared by the loaders, the scene and the
-//! accelerators: triangle meshes, analytic spheres and quads, procedural
+//! accelerators: triangle meshes, analytic spheres, quads, disks and
+//! cylinders, procedural
 //! meshes, the water height field, and the preliminary hit record that every
 //! accelerator returns.
 
@@ -9,7 +10,7 @@ pub mod shape;
 pub mod water;
 
 pub use mesh::{Mesh, MeshDataError};
-pub use shape::{Quad, Sphere};
+pub use shape::{Cylinder, Disk, Quad, Sphere};
 pub use water::{WaterSurface, Wave};
 
 /// The closest hit of a ray. Surface data is computed afterwards from the

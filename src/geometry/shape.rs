@@ -1,4 +1,6 @@
-//! Analytic shapes, stored in world space: spheres and quads.
+//! Analytic shapes, stored in world space: spheres, quads, and Mitsuba's
+//! disks and open cylinders (their object space mapped to the world by the
+//! loaders, see [`Disk`] and [`Cylinder`]).
 
 use crate::math::{gamma, Aabb, Ray, Vec2, Vec3A};
 use std::f32::consts::{PI, TAU};
@@ -168,6 +170,264 @@ impl Quad {
     /// Area.
     pub fn area(&self) -> f32 {
         self.u.cross(self.v).length()
+    }
+}
+
+/// Component-wise square root.
+#[inline]
+fn sqrt3(v: Vec3A) -> Vec3A {
+    Vec3A::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt())
+}
+
+/// Mitsuba's `disk`: the unit disk `x² + y² ≤ 1` of its object's `z = 0`
+/// plane mapped to the world by an affine map, `p = centre + x·a + y·b`
+/// (an ellipse when `a` and `b` differ in length or are not orthogonal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disk {
+    /// Centre (the image of the object's origin).
+    pub center: Vec3A,
+    /// Image of the object's +x axis (`∂p/∂x`).
+    pub a: Vec3A,
+    /// Image of the object's +y axis (`∂p/∂y`).
+    pub b: Vec3A,
+    /// Unit normal of the front side, `±(a × b) / |a × b|`.
+    pub normal: Vec3A,
+    /// `(a × b) / |a × b|²`: turns a plane offset into local coordinates.
+    w: Vec3A,
+}
+
+impl Disk {
+    /// The disk `centre + x·a + y·b`, facing `a × b`, or `−(a × b)` when
+    /// `reversed` (Mitsuba's front is `M⁻ᵀ·ẑ`, which is `−(a × b)` for a
+    /// mirroring `M`, and `flip_normals` turns it over); `None` when `a`
+    /// and `b` are parallel or not finite.
+    pub fn new(center: Vec3A, a: Vec3A, b: Vec3A, reversed: bool) -> Option<Self> {
+        let n = a.cross(b);
+        let len2 = n.length_squared();
+        if len2.is_nan() || len2 <= 0.0 || !len2.is_finite() || !center.is_finite() {
+            return None;
+        }
+        let normal = n / len2.sqrt();
+        Some(Self {
+            center,
+            a,
+            b,
+            normal: if reversed { -normal } else { normal },
+            w: n / len2,
+        })
+    }
+
+    /// Plane hit, then the local coordinates' test `x² + y² ≤ 1` (Mitsuba's
+    /// `disk`). Returns `(t, x, y)` with the hit at `centre + x·a + y·b`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        let denom = self.normal.dot(ray.dir);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = self.normal.dot(self.center - ray.origin) / denom;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        let rel = ray.at(t) - self.center;
+        let x = self.w.dot(rel.cross(self.b));
+        let y = self.w.dot(self.a.cross(rel));
+        if x * x + y * y <= 1.0 {
+            Some((t, x, y))
+        } else {
+            None
+        }
+    }
+
+    /// Point at local coordinates `(x, y)` and its absolute error bound
+    /// (the quad's: the point is rebuilt on the plane from them).
+    pub fn surface(&self, x: f32, y: f32) -> (Vec3A, Vec3A) {
+        let p = self.center + self.a * x + self.b * y;
+        let err = (self.center.abs() + (self.a * x).abs() + (self.b * y).abs()) * gamma(4);
+        (p, err)
+    }
+
+    /// Texture coordinates and their derivatives at local coordinates
+    /// `(x, y)`, as Mitsuba 3's `disk`: `uv = (r, φ / 2π)` with `r = √(x² +
+    /// y²)` and `φ ∈ [0, 2π)` the object-space azimuth from +x toward +y;
+    /// `∂p/∂u = M·(cos φ, sin φ, 0)`, `∂p/∂v = 2π r · M·(−sin φ, cos φ, 0)`
+    /// (`φ = 0` at the centre).
+    pub fn uv(&self, x: f32, y: f32) -> (Vec2, Vec3A, Vec3A) {
+        let r = (x * x + y * y).sqrt();
+        let mut v = y.atan2(x) / TAU;
+        if v < 0.0 {
+            v += 1.0;
+        }
+        let (cos_phi, sin_phi) = if r != 0.0 { (x / r, y / r) } else { (1.0, 0.0) };
+        let dpdu = self.a * cos_phi + self.b * sin_phi;
+        let dpdv = (self.b * cos_phi - self.a * sin_phi) * (TAU * r);
+        (Vec2::new(r, v), dpdu, dpdv)
+    }
+
+    /// World bounds: the ellipse's extent `√(aₖ² + bₖ²)` about the centre on each axis.
+    pub fn bounds(&self) -> Aabb {
+        let extent = sqrt3(self.a * self.a + self.b * self.b);
+        Aabb::new(self.center - extent, self.center + extent)
+    }
+
+    /// Area `π |a × b|`.
+    pub fn area(&self) -> f32 {
+        PI * self.a.cross(self.b).length()
+    }
+}
+
+/// Mitsuba's `cylinder`: an open tube (no caps) of radius `radius` about
+/// the segment from `base` along the unit `axis` for `length`. `s` and `t`
+/// are the object's x and y axes in the world (`s`, `t`, `axis`
+/// orthonormal; left-handed when the object-to-world map mirrors), from
+/// which the azimuth `φ` of the texture coordinates is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cylinder {
+    /// Centre of the `v = 0` end.
+    pub base: Vec3A,
+    /// Unit direction of `φ = 0`.
+    pub s: Vec3A,
+    /// Unit direction of `φ = π/2`.
+    pub t: Vec3A,
+    /// Unit axis, from the `v = 0` end to the `v = 1` end.
+    pub axis: Vec3A,
+    /// Radius (> 0).
+    pub radius: f32,
+    /// Length (> 0).
+    pub length: f32,
+    /// The normals point toward the axis (Mitsuba's `flip_normals`).
+    pub inward: bool,
+}
+
+impl Cylinder {
+    /// A cylinder; `None` when the frame is not orthonormal (to 1e-4), the
+    /// radius or length not positive, or a value not finite.
+    pub fn new(base: Vec3A, [s, t, axis]: [Vec3A; 3], radius: f32, length: f32, inward: bool) -> Option<Self> {
+        let unit = |v: Vec3A| (v.length() - 1.0).abs() <= 1e-4;
+        let orthogonal = s.dot(t).abs() <= 1e-4 && s.dot(axis).abs() <= 1e-4 && t.dot(axis).abs() <= 1e-4;
+        let finite = base.is_finite() && radius.is_finite() && length.is_finite();
+        (unit(s) && unit(t) && unit(axis) && orthogonal && finite && radius > 0.0 && length > 0.0).then_some(Self {
+            base,
+            s,
+            t,
+            axis,
+            radius,
+            length,
+            inward,
+        })
+    }
+
+    /// Nearest root of `x² + y² = r²` in `(0, t_max)` with `0 ≤ z ≤ length`
+    /// (local coordinates), as [`Sphere::intersect`].
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+        self.intersect_where(ray, t_max, |_| true)
+    }
+
+    /// The nearest root in `(0, t_max)` within the tube's length that `keep`
+    /// accepts (an alpha cutout may reject the near root and keep the far one).
+    ///
+    /// The ray is taken to the cylinder's frame and the quadratic solved in
+    /// f64, as Mitsuba does: the discriminant as `r² − |f⊥|²` (the sphere's
+    /// stable form, in the plane across the axis), the second root from
+    /// `c / q`.
+    #[inline]
+    pub fn intersect_where(&self, ray: &Ray, t_max: f32, keep: impl Fn(f32) -> bool) -> Option<f32> {
+        let dot = |u: [f64; 3], v: Vec3A| u[0] * f64::from(v.x) + u[1] * f64::from(v.y) + u[2] * f64::from(v.z);
+        let f = [
+            f64::from(ray.origin.x) - f64::from(self.base.x),
+            f64::from(ray.origin.y) - f64::from(self.base.y),
+            f64::from(ray.origin.z) - f64::from(self.base.z),
+        ];
+        let d = [f64::from(ray.dir.x), f64::from(ray.dir.y), f64::from(ray.dir.z)];
+        let (ox, oy, oz) = (dot(f, self.s), dot(f, self.t), dot(f, self.axis));
+        let (dx, dy, dz) = (dot(d, self.s), dot(d, self.t), dot(d, self.axis));
+        let a = dx * dx + dy * dy;
+        if a == 0.0 {
+            // Along the axis: the ray never crosses the tube.
+            return None;
+        }
+        let b_half = -(ox * dx + oy * dy);
+        let (px, py) = (ox + dx * (b_half / a), oy + dy * (b_half / a));
+        let r = f64::from(self.radius);
+        let disc = a * (r * r - (px * px + py * py));
+        if disc < 0.0 {
+            return None;
+        }
+        let c = ox * ox + oy * oy - r * r;
+        let q = b_half + disc.sqrt().copysign(b_half);
+        if q == 0.0 {
+            return None;
+        }
+        let (mut t0, mut t1) = (c / q, q / a);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        let length = f64::from(self.length);
+        [t0, t1].into_iter().find_map(|t| {
+            let z = oz + dz * t;
+            let t32 = t as f32;
+            (t32 > 0.0 && t32 < t_max && (0.0..=length).contains(&z) && keep(t32)).then_some(t32)
+        })
+    }
+
+    /// Local coordinates `(x, y, z)` of a world point.
+    #[inline]
+    fn local(&self, p: Vec3A) -> (f32, f32, f32) {
+        let rel = p - self.base;
+        (rel.dot(self.s), rel.dot(self.t), rel.dot(self.axis))
+    }
+
+    /// Hit point re-projected on the tube (Mitsuba moves it along the
+    /// normal by `r − ρ`), its unit normal (outward, or toward the axis when
+    /// `inward`) and its absolute error bound. The radial direction is
+    /// recomputed from the point, so its length is off by a few ulps (γ(4)
+    /// of the radius) and the sum `base + r·radial + z·axis` adds γ(3) of
+    /// its terms; γ(8) of each term covers both.
+    pub fn surface(&self, ray: &Ray, t: f32) -> (Vec3A, Vec3A, Vec3A) {
+        let (x, y, z) = self.local(ray.at(t));
+        let rho = (x * x + y * y).sqrt();
+        let (cos_phi, sin_phi) = if rho > 0.0 { (x / rho, y / rho) } else { (1.0, 0.0) };
+        let radial = self.s * cos_phi + self.t * sin_phi;
+        let p = self.base + radial * self.radius + self.axis * z;
+        let err = (self.base.abs() + (self.s.abs() + self.t.abs()) * self.radius + (self.axis * z).abs()) * gamma(8);
+        let n = radial.normalize_or(self.s);
+        (p, if self.inward { -n } else { n }, err)
+    }
+
+    /// Texture coordinates and their derivatives at surface point `p`, as
+    /// Mitsuba 3's `cylinder`: `u = φ / 2π` with `φ ∈ [0, 2π)` the azimuth
+    /// from `s` toward `t`, `v = z / length`; `∂p/∂u = 2π (−y·s + x·t)`,
+    /// `∂p/∂v = length · axis`, `(x, y, z)` the local coordinates.
+    pub fn uv(&self, p: Vec3A) -> (Vec2, Vec3A, Vec3A) {
+        let (x, y, z) = self.local(p);
+        let mut phi = y.atan2(x);
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        let dpdu = (self.t * x - self.s * y) * TAU;
+        (Vec2::new(phi / TAU, z / self.length), dpdu, self.axis * self.length)
+    }
+
+    /// The point at texture coordinates `uv` and its unit normal.
+    pub fn point_at(&self, uv: Vec2) -> (Vec3A, Vec3A) {
+        let (sin_phi, cos_phi) = (uv.x * TAU).sin_cos();
+        let radial = self.s * cos_phi + self.t * sin_phi;
+        let p = self.base + radial * self.radius + self.axis * (uv.y * self.length);
+        (p, if self.inward { -radial } else { radial })
+    }
+
+    /// World bounds: the boxes of the two end circles, each of extent
+    /// `r √(sₖ² + tₖ²)` on axis `k`.
+    pub fn bounds(&self) -> Aabb {
+        let extent = sqrt3(self.s * self.s + self.t * self.t) * self.radius;
+        let top = self.base + self.axis * self.length;
+        Aabb::new(self.base.min(top) - extent, self.base.max(top) + extent)
+    }
+
+    /// Area `2π r · length`.
+    pub fn area(&self) -> f32 {
+        TAU * self.radius * self.length
     }
 }
 

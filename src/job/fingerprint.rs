@@ -170,7 +170,7 @@ fn fingerprint_of(
             field("environment map", text.as_bytes());
         }
     }
-    field("objects", format!("{:?}", scene.objects).as_bytes());
+    field("objects", encoding::objects(&scene.objects).as_bytes());
     for mesh in &scene.meshes {
         // Geometry only: moving or renaming the mesh file does not matter.
         let floats = mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.to_array());
@@ -263,6 +263,72 @@ mod encoding {
         dielectric: Option<Dielectric>,
         conductor: Option<Conductor>,
         coating: Option<Coating>,
+    }
+
+    /// The objects' text: the derived `Debug` of the scene's objects as it
+    /// was before disks and cylinders existed (the fingerprints of scenes
+    /// without them are unchanged), a disk or a cylinder in the
+    /// fingerprint's own spelling below.
+    pub(super) fn objects(objects: &[scene::Object]) -> String {
+        let texts: Vec<String> = objects
+            .iter()
+            .map(|o| {
+                let shape = match &o.shape {
+                    scene::Shape::Disk(d) => format!("{:?}", Disk::of(d)),
+                    scene::Shape::Cylinder(c) => format!("{:?}", Cylinder::of(c)),
+                    _ => return format!("{o:?}"),
+                };
+                format!(
+                    "Object {{ name: {:?}, shape: {shape}, material: {} }}",
+                    o.name, o.material
+                )
+            })
+            .collect();
+        format!("[{}]", texts.join(", "))
+    }
+
+    #[derive(Debug)]
+    pub(super) struct Disk {
+        center: Vec3A,
+        a: Vec3A,
+        b: Vec3A,
+        normal: Vec3A,
+    }
+
+    impl Disk {
+        pub(super) fn of(d: &scene::Disk) -> Self {
+            Self {
+                center: d.center,
+                a: d.a,
+                b: d.b,
+                normal: d.normal,
+            }
+        }
+    }
+
+    #[derive(Debug)]
+    pub(super) struct Cylinder {
+        base: Vec3A,
+        s: Vec3A,
+        t: Vec3A,
+        axis: Vec3A,
+        radius: f32,
+        length: f32,
+        inward: bool,
+    }
+
+    impl Cylinder {
+        pub(super) fn of(c: &scene::Cylinder) -> Self {
+            Self {
+                base: c.base,
+                s: c.s,
+                t: c.t,
+                axis: c.axis,
+                radius: c.radius,
+                length: c.length,
+                inward: c.inward,
+            }
+        }
     }
 
     #[derive(Debug)]
@@ -533,6 +599,39 @@ mod tests {
                  coating: Some(Coating { ior: 1.4 }) }"
             ),
             "{text}"
+        );
+    }
+
+    /// The objects' text is the derived `Debug` of the objects for the
+    /// shapes that existed before disks and cylinders (the fingerprints of
+    /// those scenes are unchanged), and pinned for disks and cylinders.
+    #[test]
+    fn object_encoding_is_stable() {
+        use crate::math::Vec3A;
+        use crate::scene::{Cylinder, Disk, Object, Shape};
+        let s = scene();
+        assert_eq!(encoding::objects(&s.objects), format!("{:?}", s.objects));
+        let objects = [
+            Object {
+                name: "d".into(),
+                shape: Shape::Disk(Disk::new(Vec3A::Z, Vec3A::X, Vec3A::Y * 2.0, true).unwrap()),
+                material: 1,
+            },
+            Object {
+                name: "c".into(),
+                shape: Shape::Cylinder(
+                    Cylinder::new(Vec3A::ZERO, [Vec3A::X, Vec3A::Y, Vec3A::Z], 0.5, 2.0, false).unwrap(),
+                ),
+                material: 0,
+            },
+        ];
+        assert_eq!(
+            encoding::objects(&objects),
+            "[Object { name: \"d\", shape: Disk { center: Vec3A(0.0, 0.0, 1.0), a: Vec3A(1.0, 0.0, 0.0), \
+             b: Vec3A(0.0, 2.0, 0.0), normal: Vec3A(-0.0, -0.0, -1.0) }, material: 1 }, \
+             Object { name: \"c\", shape: Cylinder { base: Vec3A(0.0, 0.0, 0.0), s: Vec3A(1.0, 0.0, 0.0), \
+             t: Vec3A(0.0, 1.0, 0.0), axis: Vec3A(0.0, 0.0, 1.0), radius: 0.5, length: 2.0, inward: false }, \
+             material: 0 }]"
         );
     }
 

@@ -6,7 +6,7 @@
 
 use super::material::AlphaMask;
 use super::{Scene, Shape};
-use crate::geometry::{Mesh, Quad, Sphere};
+use crate::geometry::{Cylinder, Disk, Mesh, Quad, Sphere};
 use crate::math::{Ray, Vec2};
 use std::sync::Arc;
 
@@ -69,6 +69,28 @@ impl Cutouts {
         match self.objects.get(object as usize) {
             Some(Some(c)) if !c.mask.opaque_at(Vec2::new(hit.1, hit.2)) => None,
             _ => Some(hit),
+        }
+    }
+
+    /// The disk's hit `(t, x, y)` if it is on the surface (the mask read at
+    /// the disk's texture coordinates `(r, φ / 2π)`).
+    #[inline]
+    pub fn disk(&self, object: u32, d: &Disk, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        let hit = d.intersect(ray, t_max)?;
+        match self.objects.get(object as usize) {
+            Some(Some(c)) if !c.mask.opaque_at(d.uv(hit.1, hit.2).0) => None,
+            _ => Some(hit),
+        }
+    }
+
+    /// The nearest root of the cylinder that is on the surface (the far
+    /// one when the near one is in a hole), read at the re-projected point's
+    /// texture coordinates as for the sphere.
+    #[inline]
+    pub fn cylinder(&self, object: u32, cyl: &Cylinder, ray: &Ray, t_max: f32) -> Option<f32> {
+        match self.objects.get(object as usize) {
+            Some(Some(c)) => cyl.intersect_where(ray, t_max, |t| c.mask.opaque_at(cyl.uv(cyl.surface(ray, t).0).0)),
+            _ => cyl.intersect(ray, t_max),
         }
     }
 

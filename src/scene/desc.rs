@@ -187,6 +187,10 @@ pub enum ObjectKind {
     Quad,
     /// `"mesh"`.
     Mesh,
+    /// `"disk"`: a flat disk (Mitsuba's `disk`).
+    Disk,
+    /// `"cylinder"`: an open tube without caps (Mitsuba's `cylinder`).
+    Cylinder,
     /// `"water"`: a procedural height-field surface.
     Water,
 }
@@ -460,18 +464,24 @@ pub struct LightDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
-    /// `"sphere"`, `"quad"`, `"mesh"` or `"water"`.
+    /// `"sphere"`, `"quad"`, `"disk"`, `"cylinder"`, `"mesh"` or `"water"`.
     #[serde(rename = "type")]
     pub kind: Spanned<ObjectKind>,
     /// Name used in messages.
     pub name: Option<String>,
     /// Material name (a key of `[materials]`).
     pub material: Spanned<String>,
-    /// Sphere centre, quad centre (with `size`), or water centre (its `y`
-    /// is the mean water level).
+    /// Sphere, disk or quad centre (a quad's with `size`), or water centre
+    /// (its `y` is the mean water level).
     pub center: Option<Spanned<Vec3Desc>>,
-    /// Sphere radius.
+    /// Sphere, disk or cylinder radius.
     pub radius: Option<Spanned<f64>>,
+    /// Cylinder: centre of the end where `v = 0`.
+    pub p0: Option<Spanned<Vec3Desc>>,
+    /// Cylinder: centre of the end where `v = 1`.
+    pub p1: Option<Spanned<Vec3Desc>>,
+    /// Cylinder: the normals point toward the axis (Mitsuba's `flip_normals`).
+    pub flip_normals: Option<Spanned<bool>>,
     /// Quad corner (with `u` and `v`).
     pub corner: Option<Spanned<Vec3Desc>>,
     /// Quad first edge.
@@ -480,11 +490,12 @@ pub struct ObjectDesc {
     pub v: Option<Spanned<Vec3Desc>>,
     /// Quad `[width, height]` (with `center`), or water extent `[x, z]`.
     pub size: Option<Spanned<Vec2Desc>>,
-    /// Quad facing direction (with `center` and `size`).
+    /// Quad or disk facing direction (a quad's with `center` and `size`).
     pub normal: Option<Spanned<Vec3Desc>>,
-    /// Quad height direction (with `normal`).
+    /// Quad height direction, or the direction of a disk's `φ = π/2`
+    /// (with `normal`).
     pub up: Option<Spanned<Vec3Desc>>,
-    /// Quad or mesh rotation, degrees about x then y then z.
+    /// Quad, disk or mesh rotation, degrees about x then y then z.
     pub rotate: Option<Spanned<Vec3Desc>>,
     /// Mesh file (relative to the scene file) or `asset:NAME`.
     pub file: Option<Spanned<String>>,

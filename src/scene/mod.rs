@@ -20,7 +20,7 @@ use crate::geometry::{Hit, TriangleTest};
 use crate::math::{Aabb, Ray, SamplerKind, Transform, Vec2, Vec3A, Vec4};
 use std::sync::Arc;
 
-pub use crate::geometry::{Mesh, Quad, Sphere};
+pub use crate::geometry::{Cylinder, Disk, Mesh, Quad, Sphere};
 pub use crate::geometry::{WaterSurface, Wave};
 pub use camera::{Camera, FovAxis};
 pub use cutout::Cutouts;
@@ -284,6 +284,10 @@ pub enum Shape {
     Sphere(Sphere),
     /// Analytic quad (world space).
     Quad(Quad),
+    /// Analytic disk, circular or elliptic (world space).
+    Disk(Disk),
+    /// Analytic open cylinder (world space).
+    Cylinder(Cylinder),
     /// An instance of `Scene::meshes[mesh]`.
     Mesh {
         /// Index into `Scene::meshes`.
@@ -356,6 +360,8 @@ impl Scene {
         match &self.objects[i].shape {
             Shape::Sphere(s) => s.bounds(),
             Shape::Quad(q) => q.bounds(),
+            Shape::Disk(d) => d.bounds(),
+            Shape::Cylinder(c) => c.bounds(),
             Shape::Mesh { mesh, transform, .. } => transform.bounds(&self.meshes[*mesh as usize].bounds()),
         }
     }
@@ -416,6 +422,25 @@ impl Scene {
             Shape::Quad(q) => {
                 let (p, err) = q.surface(hit.u, hit.v);
                 (p, err, q.normal, q.normal, Vec2::new(hit.u, hit.v), q.u, q.v)
+            }
+            Shape::Disk(d) => {
+                // The hit's (u, v) are the local coordinates (x, y).
+                let (p, err) = d.surface(hit.u, hit.v);
+                let (uv, dpdu, dpdv) = if wants_uv {
+                    d.uv(hit.u, hit.v)
+                } else {
+                    (Vec2::ZERO, Vec3A::ZERO, Vec3A::ZERO)
+                };
+                (p, err, d.normal, d.normal, uv, dpdu, dpdv)
+            }
+            Shape::Cylinder(c) => {
+                let (p, n, err) = c.surface(ray, hit.t);
+                let (uv, dpdu, dpdv) = if wants_uv {
+                    c.uv(p)
+                } else {
+                    (Vec2::ZERO, Vec3A::ZERO, Vec3A::ZERO)
+                };
+                (p, err, n, n, uv, dpdu, dpdv)
             }
             Shape::Mesh {
                 mesh,

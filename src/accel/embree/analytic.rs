@@ -1,10 +1,10 @@
-//! The analytic shapes (spheres, quads) as Embree user geometries: their
+//! The analytic shapes (spheres, quads, disks, cylinders) as Embree user geometries: their
 //! bounds, intersect and occluded callbacks, which call the scene's own
 //! intersection code.
 
 use super::sys;
 use crate::math::{Aabb, Ray, Vec3A};
-use crate::scene::{Cutouts, Quad, Sphere};
+use crate::scene::{Cutouts, Cylinder, Disk, Quad, Sphere};
 use std::sync::Arc;
 
 /// An analytic shape in the TLAS (user geometry data).
@@ -12,6 +12,8 @@ use std::sync::Arc;
 pub(super) enum AnalyticShape {
     Sphere(Sphere),
     Quad(Quad),
+    Disk(Disk),
+    Cylinder(Cylinder),
 }
 
 impl AnalyticShape {
@@ -21,6 +23,8 @@ impl AnalyticShape {
         match self {
             AnalyticShape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, 0.0, 0.0)),
             AnalyticShape::Quad(q) => q.intersect(ray, t_max),
+            AnalyticShape::Disk(d) => d.intersect(ray, t_max),
+            AnalyticShape::Cylinder(c) => c.intersect(ray, t_max).map(|t| (t, 0.0, 0.0)),
         }
     }
 
@@ -28,6 +32,8 @@ impl AnalyticShape {
         match self {
             AnalyticShape::Sphere(s) => s.bounds(),
             AnalyticShape::Quad(q) => q.bounds(),
+            AnalyticShape::Disk(d) => d.bounds(),
+            AnalyticShape::Cylinder(c) => c.bounds(),
         }
     }
 }
@@ -52,6 +58,10 @@ impl AnalyticGeometry {
                 c.sphere(self.object, s, ray, t_max).map(|t| (t, 0.0, 0.0))
             }
             (Some(c), AnalyticShape::Quad(q)) if MASKED => c.quad(self.object, q, ray, t_max),
+            (Some(c), AnalyticShape::Disk(d)) if MASKED => c.disk(self.object, d, ray, t_max),
+            (Some(c), AnalyticShape::Cylinder(cyl)) if MASKED => {
+                c.cylinder(self.object, cyl, ray, t_max).map(|t| (t, 0.0, 0.0))
+            }
             _ => self.shape.intersect(ray, t_max),
         }
     }

@@ -4,13 +4,15 @@
 //! Two levels, as in the KD-tree: one BLAS (an Embree scene holding one
 //! triangle geometry) per distinct mesh, in object space; a TLAS holding one
 //! instance geometry per mesh object (its `to_world` transform) and one user
-//! geometry per analytic sphere or quad. TLAS geometry IDs equal object
+//! geometry per analytic sphere, quad, disk or cylinder. TLAS geometry IDs equal object
 //! indices (`rtcAttachGeometryByID`), so a hit maps to `Hit::instance`
 //! without a table.
 //!
 //! Analytic shapes are user geometries whose callbacks call the scene's own
-//! [`Sphere::intersect`](crate::scene::Sphere::intersect) and
-//! [`Quad::intersect`](crate::scene::Quad::intersect): Embree then reports exactly
+//! [`Sphere::intersect`](crate::scene::Sphere::intersect),
+//! [`Quad::intersect`](crate::scene::Quad::intersect),
+//! [`Disk::intersect`](crate::scene::Disk::intersect) and
+//! [`Cylinder::intersect`](crate::scene::Cylinder::intersect): Embree then reports exactly
 //! the `(t, a, b)` of the other backends, bit for bit, so cross-checks need no
 //! tolerance for them and the robust-offset reasoning of the integrator (built
 //! around those functions' error bounds) holds unchanged. Embree's native
@@ -138,6 +140,8 @@ impl EmbreeAccel {
             let geometry = match &object.shape {
                 Shape::Sphere(s) => analytic(AnalyticShape::Sphere(*s))?,
                 Shape::Quad(q) => analytic(AnalyticShape::Quad(*q))?,
+                Shape::Disk(d) => analytic(AnalyticShape::Disk(*d))?,
+                Shape::Cylinder(c) => analytic(AnalyticShape::Cylinder(*c))?,
                 Shape::Mesh { mesh, transform, .. } => {
                     let b = blas_of_mesh[*mesh as usize].expect("BLAS built above for every used mesh");
                     Geometry::instance(&device, &blas[b], &transform.to_world)?

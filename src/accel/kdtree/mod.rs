@@ -4,9 +4,9 @@
 //!   the objects that instance the mesh. Built with Wald & Havran's O(N log N)
 //!   event-sorting SAH build with perfect splits ([`build`]).
 //! * Top level: a KD-tree of the same kind over the world bounds of the
-//!   objects (mesh instances, spheres, quads); an object straddling a plane is
-//!   referenced by both sides, and a small mailbox avoids testing it twice in
-//!   one query.
+//!   objects (mesh instances, spheres, quads, disks, cylinders); an object
+//!   straddling a plane is referenced by both sides, and a small mailbox
+//!   avoids testing it twice in one query.
 //! * Traversal: iterative, front to back for closest hits and back to
 //!   front for occlusion, fixed stack (pbrt-v3
 //!   `KdTreeAccel::Intersect`), rays moved into object space with
@@ -27,7 +27,7 @@ use self::node::{widen, KdTree, LeafResult, TreeShape};
 use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3, Vec3A};
-use crate::scene::{Cutouts, Mesh, Quad, Scene, Shape, Sphere};
+use crate::scene::{Cutouts, Cylinder, Disk, Mesh, Quad, Scene, Shape, Sphere};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -38,6 +38,8 @@ use std::time::{Duration, Instant};
 enum TopObject {
     Sphere(Sphere),
     Quad(Quad),
+    Disk(Disk),
+    Cylinder(Cylinder),
     Mesh { mesh: u32, transform: Transform },
 }
 
@@ -129,6 +131,8 @@ impl KdTreeAccel {
             .map(|o| match &o.shape {
                 Shape::Sphere(s) => TopObject::Sphere(*s),
                 Shape::Quad(q) => TopObject::Quad(*q),
+                Shape::Disk(d) => TopObject::Disk(*d),
+                Shape::Cylinder(c) => TopObject::Cylinder(*c),
                 Shape::Mesh { mesh, transform, .. } => {
                     used[*mesh as usize] = true;
                     TopObject::Mesh {
@@ -157,6 +161,8 @@ impl KdTreeAccel {
             .map(|o| match o {
                 TopObject::Sphere(s) => widen(s.bounds()),
                 TopObject::Quad(q) => widen(q.bounds()),
+                TopObject::Disk(d) => widen(d.bounds()),
+                TopObject::Cylinder(c) => widen(c.bounds()),
                 TopObject::Mesh { mesh, transform } => widen(transform.bounds(&blas[*mesh as usize].tree.bounds)),
             })
             .collect();
@@ -232,6 +238,40 @@ impl KdTreeAccel {
                     );
                 }
             }
+            TopObject::Disk(d) => {
+                let h = match &self.cutouts {
+                    Some(c) => c.disk(instance, d, ray, *limit),
+                    None => d.intersect(ray, *limit),
+                };
+                if let Some((t, u, v)) = h {
+                    found(
+                        Hit {
+                            t,
+                            instance,
+                            prim: 0,
+                            u,
+                            v,
+                        },
+                        limit,
+                    );
+                }
+            }
+            TopObject::Cylinder(cyl) => {
+                let t = match &self.cutouts {
+                    Some(c) => c.cylinder(instance, cyl, ray, *limit),
+                    None => cyl.intersect(ray, *limit),
+                };
+                if let Some(t) = t {
+                    let hit = Hit {
+                        t,
+                        instance,
+                        prim: 0,
+                        u: 0.0,
+                        v: 0.0,
+                    };
+                    found(hit, limit);
+                }
+            }
             TopObject::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
                 let blas = &self.blas[*mesh as usize];
@@ -290,6 +330,15 @@ impl KdTreeAccel {
                 Some(c) => c.quad(instance, q, ray, limit),
                 None => q.intersect(ray, limit),
             },
+            TopObject::Disk(d) => match &self.cutouts {
+                Some(c) => c.disk(instance, d, ray, limit),
+                None => d.intersect(ray, limit),
+            },
+            TopObject::Cylinder(cyl) => match &self.cutouts {
+                Some(c) => c.cylinder(instance, cyl, ray, limit),
+                None => cyl.intersect(ray, limit),
+            }
+            .map(|t| (t, 0.0, 0.0)),
             TopObject::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
                 let [p0, p1, p2] = self.meshes[*mesh as usize].corners(prim as usize);

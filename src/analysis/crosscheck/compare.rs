@@ -169,7 +169,7 @@ pub(super) fn invalid_hit(scene: &Scene, ray: &Ray, t_max: f32, hit: &Hit) -> Op
     };
     let prims = match &object.shape {
         Shape::Mesh { mesh, .. } => scene.meshes[*mesh as usize].triangles.len(),
-        Shape::Sphere(_) | Shape::Quad(_) => 1,
+        Shape::Sphere(_) | Shape::Quad(_) | Shape::Disk(_) | Shape::Cylinder(_) => 1,
     };
     if hit.prim as usize >= prims {
         return Some(format!("primitive {} out of range ({prims})", hit.prim));
@@ -190,6 +190,11 @@ pub(super) fn invalid_hit(scene: &Scene, ray: &Ray, t_max: f32, hit: &Hit) -> Op
     let along = ray.at(hit.t);
     let off = match &object.shape {
         Shape::Sphere(s) => ((along - s.center).length() - s.radius).abs(),
+        Shape::Cylinder(c) => {
+            let rel = along - c.base;
+            let radial = rel - c.axis * rel.dot(c.axis);
+            (radial.length() - c.radius).abs()
+        }
         _ => (g.p - along).length(),
     };
     // Plus the rounding bound of the reconstructed point itself, which scales
@@ -280,6 +285,23 @@ fn boundary_distance(scene: &Scene, ray: &Ray, hit: &Hit) -> f64 {
             let perp = f.cross(d).length() / d.length();
             (perp - s.radius as f64).abs()
         }
+        Shape::Disk(disk) => {
+            // The rim: in the plane, |1 − ρ| times the radius along the
+            // hit's direction from the centre.
+            let (x, y) = (hit.u as f64, hit.v as f64);
+            let rho = (x * x + y * y).sqrt();
+            let (a, b) = (disk.a.as_dvec3(), disk.b.as_dvec3());
+            let along = if rho > 0.0 { (a * x + b * y) / rho } else { a };
+            (1.0 - rho).abs() * along.length()
+        }
+        Shape::Cylinder(c) => {
+            // The silhouette (the ray's distance from the axis against the
+            // radius, as the sphere's) and the two rims.
+            let axis = c.axis.as_dvec3();
+            let silhouette = (line_distance(o, d, c.base.as_dvec3(), axis) - c.radius as f64).abs();
+            let z = (ray.at(hit.t) - c.base).dot(c.axis) as f64;
+            silhouette.min(z.abs()).min((c.length as f64 - z).abs())
+        }
     }
 }
 
@@ -338,8 +360,10 @@ fn closest_verdict(
             let t_tol = dist_tol / (dir_len * cos);
             let dt = (x.t - y.t).abs();
             let t_ok = dt <= t_tol;
-            let uv_ok = matches!(scene.objects[x.instance as usize].shape, Shape::Sphere(_))
-                || ((x.u - y.u).abs() <= UV_TOL && (x.v - y.v).abs() <= UV_TOL)
+            let uv_ok = matches!(
+                scene.objects[x.instance as usize].shape,
+                Shape::Sphere(_) | Shape::Cylinder(_)
+            ) || ((x.u - y.u).abs() <= UV_TOL && (x.v - y.v).abs() <= UV_TOL)
                 || (gx.p - gy.p).length() <= t_tol * dir_len;
             if t_ok && uv_ok {
                 let rel = if t > 0.0 { dt / t } else { 0.0 };

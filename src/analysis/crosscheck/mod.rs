@@ -19,7 +19,8 @@
 //!   direction) at a mesh vertex (1/3) or a point on a mesh edge (2/3) of a
 //!   random triangle of a random object, transformed to world space; quads
 //!   give their corners and edges, spheres a point of their silhouette seen
-//!   from the origin (the sphere's boundary). Origins: half on the outer
+//!   from the origin (the sphere's boundary), disks a point of their rim,
+//!   cylinders a point of a rim or of a silhouette line. Origins: half on the outer
 //!   sphere, half in the object's bounds scaled 3× about its centre;
 //! - **shadow**: from the first hit of a bounds ray (found by accelerator `a`,
 //!   origin moved off the surface with `offset_ray_origin`) towards a random
@@ -56,7 +57,8 @@
 //!   by more than 1e-4. Spheres carry no (u, v).
 //! - **boundary**: a hit is on its primitive's boundary when the ray passes
 //!   within `1e-6·m` (world units, ≈ 8 ε·m, computed in f64) of a triangle or
-//!   quad edge line, or of a sphere's silhouette. The distance is measured
+//!   quad edge line, or of a sphere's silhouette (a disk: its rim; a
+//!   cylinder: its silhouette lines and rims). The distance is measured
 //!   perpendicular to the ray, in the plane where ray–triangle tests decide
 //!   inside/outside (Woop et al. 2013's edge functions, Embree's as well), so
 //!   grazing rays need no special case.

@@ -135,6 +135,31 @@ impl<'s> RayGenerator<'s> {
                 transform.point(on_edge(rng, &mesh.corners(tri)))
             }
             Shape::Quad(q) => on_edge(rng, &[q.corner, q.corner + q.u, q.corner + q.u + q.v, q.corner + q.v]),
+            Shape::Disk(d) => {
+                // A point of the rim.
+                let phi = rng.f32() * std::f32::consts::TAU;
+                d.center + d.a * phi.cos() + d.b * phi.sin()
+            }
+            Shape::Cylinder(c) => {
+                let f = origin - c.base;
+                let (x, y) = (f.dot(c.s), f.dot(c.t));
+                let dist = (x * x + y * y).sqrt();
+                let z = if rng.below(2) == 0 {
+                    // A rim.
+                    c.length * rng.below(2) as f32
+                } else {
+                    rng.f32() * c.length
+                };
+                let phi = if dist > c.radius * 1.0001 && rng.below(3) != 0 {
+                    // A silhouette line: the tangents from the origin's
+                    // projection across the axis, at acos(r/D) from it.
+                    let side = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+                    y.atan2(x) + side * (c.radius / dist).acos()
+                } else {
+                    rng.f32() * std::f32::consts::TAU
+                };
+                c.base + (c.s * phi.cos() + c.t * phi.sin()) * c.radius + c.axis * z
+            }
             Shape::Sphere(s) => {
                 let f = origin - s.center;
                 let dist = f.length();

@@ -45,14 +45,20 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         st.width, st.height, st.spp, st.seed
     );
     println!("integrator  {}", st.integrator.name());
+    let count = |kind: fn(&scene::Shape) -> bool| scene.objects.iter().filter(|o| kind(&o.shape)).count();
+    // Disks and cylinders only when present (the line of other scenes is unchanged).
+    let analytic: String = [
+        ("disk", count(|s| matches!(s, scene::Shape::Disk(_)))),
+        ("cylinder", count(|s| matches!(s, scene::Shape::Cylinder(_)))),
+    ]
+    .iter()
+    .filter(|(_, n)| *n > 0)
+    .map(|(name, n)| format!(", {n} {name}{}", if *n == 1 { "" } else { "s" }))
+    .collect();
     println!(
-        "objects     {} ({} mesh instances)",
+        "objects     {} ({} mesh instances{analytic})",
         scene.objects.len(),
-        scene
-            .objects
-            .iter()
-            .filter(|o| matches!(o.shape, scene::Shape::Mesh { .. }))
-            .count()
+        count(|s| matches!(s, scene::Shape::Mesh { .. }))
     );
     let mesh_bytes: usize = scene.meshes.iter().map(|m| m.memory_bytes()).sum();
     let with_uvs = scene.meshes.iter().filter(|m| !m.uvs.is_empty()).count();

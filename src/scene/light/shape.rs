@@ -1,11 +1,11 @@
-//! Area emission on a scene object: a sphere, a quad or a triangle mesh
-//! whose material emits (Mitsuba's `area` emitter nested in a shape). The
+//! Area emission on a scene object: a sphere, a quad, a disk, a cylinder or
+//! a triangle mesh whose material emits (Mitsuba's `area` emitter nested in a shape). The
 //! surface emits from the side its geometric normal faces and keeps its
 //! BSDF, so it reflects too.
 
-use crate::geometry::{Mesh, Quad, Sphere};
+use crate::geometry::{Cylinder, Disk, Mesh, Quad, Sphere};
 use crate::math::distribution::Distribution1D;
-use crate::math::sampling::uniform_cone;
+use crate::math::sampling::{concentric_disk, uniform_cone};
 use crate::math::{Frame, Ray, Transform, Vec2, Vec3A};
 use crate::scene::{Scene, Shape};
 use std::f32::consts::PI;
@@ -26,6 +26,8 @@ pub struct SurfacePoint {
 enum Geometry {
     Sphere(Sphere),
     Quad(Quad),
+    Disk(Disk),
+    Cylinder(Cylinder),
     Mesh {
         mesh: Arc<Mesh>,
         transform: Transform,
@@ -51,6 +53,8 @@ impl ShapeEmitter {
         let (geometry, area) = match &scene.objects[object as usize].shape {
             Shape::Sphere(s) => (Geometry::Sphere(*s), 4.0 * PI * s.radius * s.radius),
             Shape::Quad(q) => (Geometry::Quad(*q), q.area()),
+            Shape::Disk(d) => (Geometry::Disk(*d), d.area()),
+            Shape::Cylinder(c) => (Geometry::Cylinder(*c), c.area()),
             Shape::Mesh { mesh, transform, .. } => {
                 let mesh = scene.meshes[*mesh as usize].clone();
                 let areas: Vec<f32> = (0..mesh.triangles.len())
@@ -88,6 +92,25 @@ impl ShapeEmitter {
                 n: q.normal,
                 uv: u,
             },
+            Geometry::Disk(d) => {
+                // The concentric map is uniform on the unit disk, and the
+                // affine map to the world scales every area by |a × b|:
+                // uniform on the ellipse, density 1 / (π |a × b|).
+                let local = concentric_disk(u);
+                let (p, _) = d.surface(local.x, local.y);
+                let uv = if wants_uv { d.uv(local.x, local.y).0 } else { Vec2::ZERO };
+                SurfacePoint { p, n: d.normal, uv }
+            }
+            Geometry::Cylinder(c) => {
+                // dA = r dφ dz: uniform in (φ, z) is uniform in area.
+                let uv = Vec2::new(u.y, u.x);
+                let (p, n) = c.point_at(uv);
+                SurfacePoint {
+                    p,
+                    n,
+                    uv: if wants_uv { uv } else { Vec2::ZERO },
+                }
+            }
             Geometry::Mesh {
                 mesh,
                 transform,

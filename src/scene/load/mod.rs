@@ -129,6 +129,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let shape = match o.kind.get_ref() {
             ObjectKind::Sphere => ctx.sphere(o)?,
             ObjectKind::Quad => ctx.quad(o)?,
+            ObjectKind::Disk => ctx.disk(o)?,
+            ObjectKind::Cylinder => ctx.cylinder(o)?,
             ObjectKind::Water => {
                 waters.push((i, ctx.water(o)?));
                 // The generated mesh is appended after the files' meshes.
@@ -201,6 +203,8 @@ fn kind_name(kind: ObjectKind) -> &'static str {
     match kind {
         ObjectKind::Sphere => "sphere",
         ObjectKind::Quad => "quad",
+        ObjectKind::Disk => "disk",
+        ObjectKind::Cylinder => "cylinder",
         ObjectKind::Mesh => "mesh",
         ObjectKind::Water => "water",
     }

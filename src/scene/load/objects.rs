@@ -1,6 +1,6 @@
-//! The `[[objects]]`: spheres, quads, mesh instances (their files resolved
-//! and loaded once each), water surfaces, and the `[medium]` that fills the
-//! water.
+//! The `[[objects]]`: spheres, quads, disks, cylinders, mesh instances
+//! (their files resolved and loaded once each), water surfaces, and the
+//! `[medium]` that fills the water.
 
 use super::ctx::Ctx;
 use super::error::SceneError;
@@ -9,7 +9,7 @@ use crate::io::MeshError;
 use crate::math::{Transform, Vec3, Vec3A};
 use crate::scene::desc::{MediumDesc, ObjectDesc, ScaleDesc, Spanned, Vec2Desc};
 use crate::scene::medium::VolumeCoefficients;
-use crate::scene::{Medium, Mesh, Object, Quad, Shape, Sphere};
+use crate::scene::{Cylinder, Disk, Medium, Mesh, Object, Quad, Shape, Sphere};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -20,13 +20,16 @@ use std::sync::Arc;
 pub const DEFAULT_WATER_RESOLUTION: u32 = 256;
 
 impl Ctx<'_> {
-    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 15] {
+    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 18] {
         fn s<T>(x: &Option<Spanned<T>>) -> Option<Range<usize>> {
             x.as_ref().map(|x| x.span())
         }
         [
             ("center", s(&o.center)),
             ("radius", s(&o.radius)),
+            ("p0", s(&o.p0)),
+            ("p1", s(&o.p1)),
+            ("flip_normals", s(&o.flip_normals)),
             ("corner", s(&o.corner)),
             ("u", s(&o.u)),
             ("v", s(&o.v)),
@@ -223,19 +226,30 @@ impl Ctx<'_> {
                 &format!("`size` = [{w}, {h}] must be positive"),
             ));
         }
-        // Unit edge directions (e_u, e_v) with e_u × e_v = facing normal.
-        let (e_u, e_v) = match (&o.normal, &o.rotate) {
+        let (e_u, e_v) = self.orientation(o, "quad")?;
+        let (u, v) = (e_u * w, e_v * h);
+        Quad::new(center - (u + v) * 0.5, u, v)
+            .filter(|q| q.area() > 0.0 && q.area().is_finite())
+            .map(Shape::Quad)
+            .ok_or_else(|| degenerate(size_desc.span(), "zero or overflowing area"))
+    }
+
+    /// Unit directions `(e_u, e_v)` with `e_u × e_v` the facing normal of a
+    /// flat shape (`"quad"` or `"disk"`, named in messages): `normal` and
+    /// an optional `up`, or `rotate` (the +z-facing shape rotated), or +z.
+    fn orientation(&self, o: &ObjectDesc, shape: &str) -> Result<(Vec3A, Vec3A), SceneError> {
+        Ok(match (&o.normal, &o.rotate) {
             (Some(_), Some(r)) => {
                 return Err(self.invalid(
                     r.span(),
-                    "give the quad's orientation either as `normal` (+ `up`) or as `rotate`, not both",
+                    format!("give the {shape}'s orientation either as `normal` (+ `up`) or as `rotate`, not both"),
                 ))
             }
             (Some(n_desc), None) => {
                 let n = self.direction(n_desc, "normal")?.normalize();
                 let up = match &o.up {
                     Some(u) => self.direction(u, "up")?.normalize(),
-                    // +y, unless the quad faces up or down (a floor or a
+                    // +y, unless the shape faces up or down (a floor or a
                     // ceiling): then its height runs along −z, away from a
                     // camera on the +z side.
                     None if n.y.abs() > 0.999 => -Vec3A::Z,
@@ -246,25 +260,73 @@ impl Ctx<'_> {
                     .filter(|_| n.cross(up).length() > 1e-4);
                 let Some(e_v) = e_v else {
                     let span = o.up.as_ref().map_or(n_desc.span(), |u| u.span());
-                    return Err(self.invalid(span, "the quad's `up` is parallel to its `normal`"));
+                    return Err(self.invalid(span, format!("the {shape}'s `up` is parallel to its `normal`")));
                 };
                 // e_u × e_v = (e_v × n) × e_v = n (e_v ⟂ n, |e_v| = 1).
                 (e_v.cross(n), e_v)
             }
             (None, rotate) => {
                 if let Some(up) = &o.up {
-                    return Err(self.invalid(up.span(), "`up` needs `normal` (it orients a quad given by `normal`)"));
+                    return Err(self.invalid(
+                        up.span(),
+                        format!("`up` needs `normal` (it orients a {shape} given by `normal`)"),
+                    ));
                 }
                 let deg = self.opt_vec3(rotate, "rotate", Vec3A::ZERO)?;
                 let r = euler_xyz(deg);
                 (r * Vec3A::X, r * Vec3A::Y)
             }
-        };
-        let (u, v) = (e_u * w, e_v * h);
-        Quad::new(center - (u + v) * 0.5, u, v)
-            .filter(|q| q.area() > 0.0 && q.area().is_finite())
-            .map(Shape::Quad)
-            .ok_or_else(|| degenerate(size_desc.span(), "zero or overflowing area"))
+        })
+    }
+
+    /// A disk: `center`, `radius` and an orientation as a quad's (`normal`
+    /// with an optional `up`, or `rotate`); its texture coordinates' `φ`
+    /// runs from the quad's `u` direction toward its `v` direction.
+    pub(super) fn disk(&self, o: &ObjectDesc) -> Result<Shape, SceneError> {
+        let what = "a disk";
+        self.only_keys(
+            what,
+            &Self::object_keys(o),
+            &["center", "radius", "normal", "up", "rotate"],
+        )?;
+        let center = self.vec3(self.required(&o.center, "center", what, o.kind.span())?, "center")?;
+        let r = self.required(&o.radius, "radius", what, o.kind.span())?;
+        let radius = self.number(r, "radius")?;
+        if radius <= 0.0 {
+            return Err(self.invalid(r.span(), format!("disk `radius` = {radius} must be > 0")));
+        }
+        let (e_u, e_v) = self.orientation(o, "disk")?;
+        Disk::new(center, e_u * radius, e_v * radius, false)
+            .filter(|d| d.area() > 0.0 && d.area().is_finite())
+            .map(Shape::Disk)
+            .ok_or_else(|| self.invalid(r.span(), "degenerate disk: zero or overflowing area"))
+    }
+
+    /// A cylinder: the centres `p0` and `p1` of its ends, `radius`, and
+    /// `flip_normals`. The azimuth of its texture coordinates is measured
+    /// in the frame Mitsuba builds about `p1 − p0` (Duff et al. 2017), so a
+    /// cylinder written with the same `p0`, `p1` in either format has the
+    /// same texture coordinates.
+    pub(super) fn cylinder(&self, o: &ObjectDesc) -> Result<Shape, SceneError> {
+        let what = "a cylinder";
+        self.only_keys(what, &Self::object_keys(o), &["p0", "p1", "radius", "flip_normals"])?;
+        let p0 = self.vec3(self.required(&o.p0, "p0", what, o.kind.span())?, "p0")?;
+        let p1_desc = self.required(&o.p1, "p1", what, o.kind.span())?;
+        let p1 = self.vec3(p1_desc, "p1")?;
+        let r = self.required(&o.radius, "radius", what, o.kind.span())?;
+        let radius = self.number(r, "radius")?;
+        if radius <= 0.0 {
+            return Err(self.invalid(r.span(), format!("cylinder `radius` = {radius} must be > 0")));
+        }
+        let length = (p1 - p0).length();
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(self.invalid(p1_desc.span(), "degenerate cylinder: `p1` equals `p0`"));
+        }
+        let frame = crate::math::Frame::from_normal((p1 - p0) / length);
+        let inward = o.flip_normals.as_ref().is_some_and(|f| *f.get_ref());
+        Cylinder::new(p0, [frame.s, frame.t, frame.n], radius, length, inward)
+            .map(Shape::Cylinder)
+            .ok_or_else(|| self.invalid(r.span(), "degenerate cylinder"))
     }
 
     /// A mesh object's file reference, transform and shading flag.

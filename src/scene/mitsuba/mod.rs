@@ -61,6 +61,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         material_index: HashMap::new(),
         mesh_sources: Vec::new(),
         mesh_index: HashMap::new(),
+        generated_index: HashMap::new(),
         objects: Vec::new(),
         images: RefCell::new(HashMap::new()),
     };
@@ -211,6 +212,8 @@ struct Builder<'a> {
     material_index: HashMap<(usize, usize), u32>,
     mesh_sources: Vec<MeshSource>,
     mesh_index: HashMap<(PathBuf, Option<u32>, bool, bool), u32>,
+    /// (shape element, flip) → generated mesh (cube, flipped rectangle).
+    generated_index: HashMap<(usize, bool), u32>,
     objects: Vec<Object>,
     images: RefCell<HashMap<(PathBuf, ColourSpace), Arc<Image>>>,
 }

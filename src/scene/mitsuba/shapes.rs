@@ -1,6 +1,10 @@
-//! `<shape>`: obj, ply, serialized, rectangle, cube and sphere, each with
-//! its BSDF (Mitsuba's default: a one-sided diffuse of reflectance 0.5) and
-//! a nested `area` emitter, which makes the shape emit and still reflect.
+//! `<shape>`: obj, ply, serialized, rectangle, cube, sphere, disk and
+//! cylinder, each with its BSDF (Mitsuba's default: a one-sided diffuse of
+//! reflectance 0.5, black on an emitting shape) and a nested `area`
+//! emitter, which makes the shape emit and still reflect; and `shapegroup`
+//! with `instance`: each instance adds the group's shapes as objects with the
+//! composed `to_world`, sharing the group's meshes and materials (one mesh
+//! in memory however many instances).
 
 use super::emitters::affine;
 use super::props::Plugin;
@@ -8,9 +12,10 @@ use super::spectrum::SpectrumUse;
 use super::xml::resolve;
 use super::{Builder, MeshSource};
 use crate::geometry::Mesh;
+use crate::math::Frame;
 use crate::math::{Transform, Vec2, Vec3, Vec3A};
 use crate::scene::load::SceneError;
-use crate::scene::{Material, Object, Quad, Shape, Sphere};
+use crate::scene::{Cylinder, Disk, Material, Object, Quad, Shape, Sphere};
 use glam::{Affine3A, Mat4};
 
 /// Mitsuba's `cube`: 24 vertices (4 per face, with the face's normal and
@@ -52,8 +57,86 @@ const CUBE_NORMALS: [[f32; 3]; 6] = [
 const CUBE_UVS: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
 
 impl Builder<'_> {
-    /// Adds a `<shape>`'s object.
+    /// Adds a `<shape>`'s objects: one, or an instance's group members.
     pub(super) fn shape(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        match p.kind {
+            "instance" => self.instance(p),
+            "shapegroup" => {
+                // Not referenced by any instance: Mitsuba renders nothing of
+                // it; its members are still read, so mistakes are reported.
+                let objects = self.objects.len();
+                self.group_members(p, &Mat4::IDENTITY, "")?;
+                self.objects.truncate(objects);
+                Ok(())
+            }
+            _ => {
+                let object = self.object(p, &Mat4::IDENTITY, None)?;
+                self.objects.push(object);
+                Ok(())
+            }
+        }
+    }
+
+    /// `<shape type="instance">`: a `<ref>` to a shapegroup and a
+    /// `to_world`; adds the group's shapes with `to_world` composed.
+    fn instance(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        let groups = p.children_of("shape")?;
+        let (group, at) = match groups.as_slice() {
+            [one] => one,
+            [] => return Err(p.error("an instance needs a <ref id=\"…\"/> to a shapegroup")),
+            [_, second, ..] => return Err(second.1.origin.error("an instance takes one shapegroup, not several")),
+        };
+        if group.kind != "shapegroup" {
+            return Err(at.origin.error(format!(
+                "an instance refers to a <shape type=\"shapegroup\">, not to a <shape type=\"{}\">",
+                group.kind
+            )));
+        }
+        let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        p.finish()?;
+        let name = p
+            .element
+            .attr("id")
+            .map_or_else(|| format!("instance@{}", p.origin().place), str::to_string);
+        self.group_members(group, &to_world, &name)
+    }
+
+    /// Adds the members of shapegroup `group` placed by `to_world`, named
+    /// `{instance}/{member}`. Refused as Mitsuba refuses them: nested groups
+    /// and instances, emitters (and media, which caustic does not render).
+    fn group_members(&mut self, group: &Plugin, to_world: &Mat4, instance: &str) -> Result<(), SceneError> {
+        let members = group.children_of("shape")?;
+        group.finish()?;
+        for (member, at) in &members {
+            match member.kind {
+                "shapegroup" => {
+                    return Err(at.origin.error(
+                        "a shapegroup inside a shapegroup: nested instancing is not permitted (nor in Mitsuba)",
+                    ))
+                }
+                "instance" => {
+                    return Err(at
+                        .origin
+                        .error("an instance inside a shapegroup: nested instancing is not permitted (nor in Mitsuba)"))
+                }
+                _ => {}
+            }
+            if let Some((e, _)) = member.children_of("emitter")?.first() {
+                return Err(e.error(
+                    "an emitter on a shape of a shapegroup: instancing of emitters is not supported (nor in Mitsuba)",
+                ));
+            }
+            // `children_of` marked the emitters read: read the member afresh.
+            let member = Plugin::new(member.element, member.ids())?;
+            let object = self.object(&member, to_world, Some(instance))?;
+            self.objects.push(object);
+        }
+        Ok(())
+    }
+
+    /// The object of a `<shape>`, its `to_world` preceded by `parent`
+    /// (an instance's), its name prefixed by the instance's.
+    fn object(&mut self, p: &Plugin, parent: &Mat4, instance: Option<&str>) -> Result<Object, SceneError> {
         if !p.children_of("medium")?.is_empty() {
             return Err(p.error("participating media (`interior` / `exterior`) are not supported yet"));
         }
@@ -62,16 +145,24 @@ impl Builder<'_> {
             .element
             .attr("id")
             .map_or_else(|| format!("{}@{}", p.kind, p.origin().place), str::to_string);
+        let name = match instance {
+            Some(i) => format!("{i}/{name}"),
+            None => name,
+        };
         let flip_normals = p.boolean("flip_normals")?.unwrap_or(false);
-        let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let own_to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let to_world = *parent * own_to_world;
         let shape = match p.kind {
             "obj" | "ply" | "serialized" => {
                 let file = p.string("filename")?.ok_or_else(|| p.error("`filename` is required"))?;
                 let at = p.take("filename").map_or(p.origin(), |e| &e.origin).clone();
                 let face_normals = p.boolean("face_normals")?.unwrap_or(false);
-                // Mitsuba orients face normals by the world-space winding, which
-                // a mirroring `to_world` reverses; caustic transforms the object's.
-                let mirrored = to_world.determinant() < 0.0;
+                // Mitsuba orients face normals by the winding of the mesh as
+                // its own `to_world` places it, which a mirroring one
+                // reverses; caustic transforms the object's. An instance's
+                // transform moves the normals as normals (its mirror keeps
+                // their side), so only the shape's own counts.
+                let mirrored = own_to_world.determinant() < 0.0;
                 let flip_normals = flip_normals != (face_normals && mirrored);
                 let shape_index = match p.kind {
                     "serialized" => {
@@ -111,9 +202,8 @@ impl Builder<'_> {
                 // the transform mirrors or the normals are flipped.
                 let mirrored = m.matrix3.determinant() < 0.0;
                 if mirrored != flip_normals {
-                    let mesh = quad_mesh(flip_normals);
                     Shape::Mesh {
-                        mesh: self.mesh_ready(mesh),
+                        mesh: self.mesh_generated(p, flip_normals, || quad_mesh(flip_normals)),
                         transform: self.transform(p, &to_world)?,
                         smooth: false,
                     }
@@ -125,18 +215,24 @@ impl Builder<'_> {
                 }
             }
             "cube" => {
-                let positions = CUBE_POSITIONS.iter().map(|p| Vec3::from_array(*p)).collect();
-                let normals = (0..24).map(|i| Vec3::from_array(CUBE_NORMALS[i / 4])).collect();
-                let triangles = (0..6u32)
-                    .flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f + 3, 4 * f, 4 * f + 2]])
-                    .collect();
-                let uvs = (0..24).map(|i| Vec2::from_array(CUBE_UVS[i % 4])).collect();
-                let mesh = Mesh::new("cube", positions, triangles, Some(normals))
-                    .and_then(|m| m.with_uvs(uvs))
-                    .expect("the cube is a valid mesh");
-                let mesh = if flip_normals { flipped(mesh) } else { mesh };
+                let mesh = self.mesh_generated(p, flip_normals, || {
+                    let positions = CUBE_POSITIONS.iter().map(|p| Vec3::from_array(*p)).collect();
+                    let normals = (0..24).map(|i| Vec3::from_array(CUBE_NORMALS[i / 4])).collect();
+                    let triangles = (0..6u32)
+                        .flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f + 3, 4 * f, 4 * f + 2]])
+                        .collect();
+                    let uvs = (0..24).map(|i| Vec2::from_array(CUBE_UVS[i % 4])).collect();
+                    let mesh = Mesh::new("cube", positions, triangles, Some(normals))
+                        .and_then(|m| m.with_uvs(uvs))
+                        .expect("the cube is a valid mesh");
+                    if flip_normals {
+                        flipped(mesh)
+                    } else {
+                        mesh
+                    }
+                });
                 Shape::Mesh {
-                    mesh: self.mesh_ready(mesh),
+                    mesh,
                     transform: self.transform(p, &to_world)?,
                     smooth: false,
                 }
@@ -175,14 +271,42 @@ impl Builder<'_> {
                     radius: r,
                 })
             }
-            "disk" | "cylinder" | "shapegroup" | "instance" | "bsplinecurve" | "linearcurve" | "sdfgrid" => {
+            "disk" => {
+                let m = affine(p, &to_world)?;
+                let (a, b) = (m.transform_vector3a(Vec3A::X), m.transform_vector3a(Vec3A::Y));
+                let det = m.matrix3.determinant();
+                if !(det != 0.0 && det.is_finite()) {
+                    return Err(p.error("`to_world` is singular (the disk's normal is undefined)"));
+                }
+                // Mitsuba's front is M⁻ᵀ·ẑ = (a × b) / det M: −(a × b)
+                // when M mirrors; `flip_normals` turns it over.
+                Shape::Disk(
+                    Disk::new(m.translation, a, b, (det < 0.0) != flip_normals)
+                        .ok_or_else(|| p.error("`to_world` flattens the disk to a line"))?,
+                )
+            }
+            "cylinder" => Shape::Cylinder(cylinder(p, &to_world, flip_normals, instance.is_some())?),
+            "shapegroup" | "instance" => return Err(p.error("nested instancing is not permitted (nor in Mitsuba)")),
+            "bsplinecurve" | "linearcurve" | "sdfgrid" => {
                 return Err(p.error(format!("the shape `{}` is not supported yet", p.kind)))
             }
             other => return Err(p.error(format!("the shape `{other}` is unknown"))),
         };
         p.finish()?;
-        self.objects.push(Object { name, shape, material });
-        Ok(())
+        Ok(Object { name, shape, material })
+    }
+
+    /// The index of a mesh the front end builds (cube, flipped rectangle):
+    /// built once per shape element and flip, so the instances of a
+    /// shapegroup share it.
+    fn mesh_generated(&mut self, p: &Plugin, flip: bool, build: impl FnOnce() -> Mesh) -> u32 {
+        let key = (p.element as *const _ as usize, flip);
+        if let Some(&index) = self.generated_index.get(&key) {
+            return index;
+        }
+        let index = self.mesh_ready(build());
+        self.generated_index.insert(key, index);
+        index
     }
 
     /// The material of a shape: its BSDF (or Mitsuba's default) and the
@@ -204,7 +328,10 @@ impl Builder<'_> {
         let mut material = match &bsdf {
             Some(b) => self.bsdf(b)?,
             None => {
-                let mut m = Material::diffuse("default", Vec3A::splat(0.5));
+                // Mitsuba's `Shape` gives a shape without a BSDF a diffuse
+                // one of reflectance 0.5, or 0 when it emits.
+                let reflectance = if emitters.is_empty() { 0.5 } else { 0.0 };
+                let mut m = Material::diffuse("default", Vec3A::splat(reflectance));
                 m.ambient = Vec3A::ZERO;
                 m.one_sided = true;
                 m
@@ -233,6 +360,50 @@ impl Builder<'_> {
     fn transform(&self, p: &Plugin, m: &Mat4) -> Result<Transform, SceneError> {
         Transform::from_affine(affine(p, m)?).ok_or_else(|| p.error("`to_world` is singular"))
     }
+}
+
+/// Mitsuba 3's `cylinder`: `to_world · translate(p0) · frame(p1 − p0) ·
+/// scale(r, r, |p1 − p0|)` (the frame of Duff et al. 2017 about the unit
+/// axis), which must be a rotation (possibly mirroring) times a scale equal
+/// across the axis: Mitsuba warns about shear and unequal scales across
+/// the axis and renders them inconsistently (its area, hence an emitter's
+/// power, is that of a round tube), so caustic refuses them. The normals
+/// point outward whether or not the map mirrors (Mitsuba flips them back),
+/// inward with `flip_normals`.
+fn cylinder(p: &Plugin, to_world: &Mat4, flip_normals: bool, in_instance: bool) -> Result<Cylinder, SceneError> {
+    let radius = p.float_checked("radius", 1.0, "> 0", |r| r > 0.0)?;
+    let p0 = p.vector("p0")?.unwrap_or(Vec3::ZERO);
+    let p1 = p.vector("p1")?.unwrap_or(Vec3::Z);
+    let length = (p1 - p0).length();
+    if !(length > 0.0 && length.is_finite()) {
+        return Err(p.error("`p0` and `p1` coincide: the cylinder has no axis"));
+    }
+    let frame = Frame::from_normal(Vec3A::from((p1 - p0) / length));
+    let object = Affine3A::from_translation(p0)
+        * Affine3A::from_mat3(glam::Mat3::from_cols(frame.s.into(), frame.t.into(), frame.n.into()))
+        * Affine3A::from_scale(Vec3::new(radius, radius, length));
+    let m = affine(p, to_world)? * object;
+    let [x, y, z] = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+    let (r, length) = (x.length(), z.length());
+    let tol = 1e-4 * r.max(length);
+    let round = (y.length() - r).abs() <= 1e-4 * r
+        && x.dot(y).abs() <= tol * r
+        && x.dot(z).abs() <= tol * length
+        && y.dot(z).abs() <= tol * length;
+    if !(round && r > 0.0 && length > 0.0) {
+        return Err(p.error(if in_instance {
+            "the instance's `to_world` shears the cylinder or scales it unevenly across its axis: an elliptic tube is not supported"
+        } else {
+            "`to_world` shears the cylinder or scales it unevenly across its axis (Mitsuba warns and renders it inconsistently): not supported"
+        }));
+    }
+    let axis = z / length;
+    let s = (x - axis * axis.dot(x)).normalize();
+    let t = axis.cross(s);
+    // The object's y axis may be −(axis × s) when the map mirrors.
+    let t = if t.dot(y) < 0.0 { -t } else { t };
+    Cylinder::new(m.translation, [s, t, axis], r, length, flip_normals)
+        .ok_or_else(|| p.error("`to_world` makes the cylinder degenerate"))
 }
 
 /// The rectangle [−1, 1]² as two triangles with Mitsuba's UVs, facing −z
