@@ -419,3 +419,16 @@ fn blends_and_masks_mix_their_sides_in_expectation() {
     );
     assert!((mask - Vec3A::splat(0.7)).abs().max_element() < 0.01, "{mask}");
 }
+
+/// `hide_emitters`: the sky the camera sees is black, the wall it lights is not.
+#[test]
+fn hidden_emitters_light_the_scene_but_are_not_seen() {
+    let sky = r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#;
+    let hide = r#"<integrator type="path"><boolean name="hide_emitters" value="true"/></integrator>"#;
+    assert_eq!(mean_of(&format!("{hide}{sky}"), 4), Vec3A::ZERO);
+    assert_eq!(mean_of(sky, 4), Vec3A::ONE);
+    let wall = r#"<shape type="rectangle"><transform name="to_world"><scale value="20"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>"#;
+    let lit = mean_of(&format!("{hide}{sky}{wall}"), 256);
+    assert!((lit - Vec3A::splat(0.5)).abs().max_element() < 0.01, "{lit}");
+}

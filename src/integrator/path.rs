@@ -86,6 +86,7 @@ pub struct PathTracer<'a> {
     /// caustic the map holds (the photons' own depth).
     caustic_depth: u32,
     water: Option<WaterVolume<'a>>,
+    hide_emitters: bool,
 }
 
 impl<'a> PathTracer<'a> {
@@ -113,6 +114,7 @@ impl<'a> PathTracer<'a> {
                 MediumPlan::Run { .. } => WaterVolume::of(scene),
                 _ => None,
             },
+            hide_emitters: scene.settings.hide_emitters,
         }
     }
 
@@ -178,6 +180,8 @@ impl<'a> PathTracer<'a> {
         loop {
             let hit = self.accel.intersect(&ray, f32::INFINITY);
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
+            // Emitters the camera sees directly, when the scene hides them.
+            let hidden = depth == 0 && self.hide_emitters;
             let emitter = self.lights.nearest_hit(&ray, t_hit);
 
             if let Some(water) = self.water.as_ref().filter(|_| medium.inside()) {
@@ -251,7 +255,7 @@ impl<'a> PathTracer<'a> {
                 // Light reached through delta bounces after a map vertex is
                 // the map's caustic.
                 let in_map = since_map.is_some_and(|n| n >= 1 && n <= self.caustic_depth);
-                if e.radiance != Vec3A::ZERO && !in_map {
+                if e.radiance != Vec3A::ZERO && !in_map && !hidden {
                     let w = if specular {
                         1.0
                     } else {
@@ -264,7 +268,7 @@ impl<'a> PathTracer<'a> {
             let Some(hit) = hit else {
                 // Environments emit no photons: never in the map.
                 let (le, light_pdf) = self.lights.environment(ray.dir.normalize());
-                if le != Vec3A::ZERO {
+                if le != Vec3A::ZERO && !hidden {
                     let w = if specular {
                         1.0
                     } else {
@@ -279,7 +283,7 @@ impl<'a> PathTracer<'a> {
             if let Some(light) = self.lights.object_emitter(si.object) {
                 // An emitting surface, seen from the side its normal faces.
                 let in_map = since_map.is_some_and(|n| n >= 1 && n <= self.caustic_depth);
-                if ray.dir.dot(si.ng) < 0.0 && !in_map {
+                if ray.dir.dot(si.ng) < 0.0 && !in_map && !hidden {
                     let w = if specular {
                         1.0
                     } else {

@@ -233,8 +233,12 @@ impl<'a> Whitted<'a> {
                 }
             }
         }
+        // Emitters the camera sees directly, when the scene hides them.
+        let hidden = depth == 0 && self.scene.settings.hide_emitters;
         let l = match (emitted, hit) {
+            (Some(_), _) if hidden => Vec3A::ZERO,
             (Some(l), _) => l,
+            (None, None) if hidden => Vec3A::ZERO,
             (None, Some(hit)) => self.shade(ray, &hit, depth, ctx),
             (None, None) => self
                 .environment_maps
@@ -252,7 +256,8 @@ impl<'a> Whitted<'a> {
         let si = self.scene.surface_interaction(ray, hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
         // An emitting surface seen from the side its normal faces.
-        let emitted = if ray.dir.dot(si.ng) < 0.0 {
+        let hidden = depth == 0 && self.scene.settings.hide_emitters;
+        let emitted = if ray.dir.dot(si.ng) < 0.0 && !hidden {
             m.emission
         } else {
             Vec3A::ZERO

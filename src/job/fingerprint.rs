@@ -93,7 +93,12 @@ fn fingerprint_of(
     let p = &settings.photons;
     let ppm_keys = format!(", progressive: {:?}, alpha: {:?}", p.progressive, p.alpha);
     let text = text.replacen(&ppm_keys, "", 1);
+    // Hiding emitters likewise, hashed on its own only when on.
+    let text = text.replacen(&format!(", hide_emitters: {:?}", settings.hide_emitters), "", 1);
     field("settings", text.as_bytes());
+    if settings.hide_emitters {
+        field("hide emitters", b"on");
+    }
     if p.progressive {
         field("progressive photons", format!("alpha {:?}", p.alpha).as_bytes());
     }

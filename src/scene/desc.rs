@@ -229,6 +229,8 @@ pub struct RenderDesc {
     pub min_spp: Option<Spanned<u32>>,
     /// What the noise threshold bounds.
     pub adaptive_goal: Option<AdaptiveGoalName>,
+    /// Emitters seen directly by the camera are black.
+    pub hide_emitters: Option<bool>,
     /// Denoise the final image (Open Image Denoise).
     pub denoise: Option<bool>,
     /// The denoising filter's quality.

@@ -170,6 +170,11 @@ pub struct RenderSettings {
     /// the water region. Kept here rather than in [`Scene`] so that code
     /// building scenes by hand needs no change (`..Default::default()`).
     pub medium: Option<Medium>,
+    /// Emitters seen directly by the camera are black: lights, emitting
+    /// surfaces and the environment light the scene but do not appear in
+    /// it (Mitsuba's `hide_emitters`; `[render] hide_emitters`). They still
+    /// appear in reflections and refractions.
+    pub hide_emitters: bool,
     /// Denoise the final image with Open Image Denoise (`[render] denoise`,
     /// `--denoise`): what is written, not what is sampled (not in the
     /// fingerprint). Kept last but one: the fingerprint relies on it.
@@ -271,6 +276,7 @@ impl Default for RenderSettings {
             sharing: SampleSharing::Spread,
             photons: PhotonSettings::default(),
             medium: None,
+            hide_emitters: false,
             denoise: false,
             denoise_quality: DenoiseQuality::High,
         }

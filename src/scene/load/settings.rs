@@ -118,6 +118,7 @@ impl Ctx<'_> {
             },
             photons: d.photons,
             medium: None,
+            hide_emitters: r.hide_emitters.unwrap_or(d.hide_emitters),
             denoise: r.denoise.unwrap_or(d.denoise),
             denoise_quality: match r.denoise_quality {
                 None => d.denoise_quality,

@@ -257,9 +257,7 @@ pub fn integrator(p: &Plugin, settings: &mut RenderSettings, warnings: &mut Vec<
             settings.max_depth = mitsuba_depth(depth, p)?;
             // Russian roulette starts at caustic's own depth: unbiased either way.
             p.int("rr_depth")?;
-            if p.boolean("hide_emitters")?.unwrap_or(false) {
-                return Err(p.error("`hide_emitters` is not supported"));
-            }
+            settings.hide_emitters = p.boolean("hide_emitters")?.unwrap_or(false);
             p.finish()
         }
         "direct" => {
@@ -273,9 +271,7 @@ pub fn integrator(p: &Plugin, settings: &mut RenderSettings, warnings: &mut Vec<
                     }
                 }
             }
-            if p.boolean("hide_emitters")?.unwrap_or(false) {
-                return Err(p.error("`hide_emitters` is not supported"));
-            }
+            settings.hide_emitters = p.boolean("hide_emitters")?.unwrap_or(false);
             p.finish()
         }
         "moment" | "aov" => {
