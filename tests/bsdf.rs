@@ -149,6 +149,11 @@ fn plastic(albedo: f32) -> Material {
     m
 }
 
+fn anisotropic(mut m: Material, roughness_v: f32) -> Material {
+    m.roughness_v = Some(roughness_v);
+    m
+}
+
 fn rough_plastic(albedo: f32, alpha: f32, nonlinear: bool) -> Material {
     let mut m = Material::diffuse("rough plastic", Vec3A::new(albedo, 0.5 * albedo, 0.2));
     m.coating = Some(Coating {
@@ -204,6 +209,12 @@ fn microfacet_lobes_sample_their_density() {
         chi2("beckmann gold 0.3", &bsdf(&beckmann(gold(0.3))), wo);
         chi2("beckmann gold 0.6", &bsdf(&beckmann(gold(0.6))), wo);
         chi2("plastic", &bsdf(&plastic(0.8)), wo);
+        chi2("anisotropic gold 0.2/0.6", &bsdf(&anisotropic(gold(0.2), 0.6)), wo);
+        chi2(
+            "anisotropic beckmann gold 0.5/0.15",
+            &bsdf(&beckmann(anisotropic(gold(0.5), 0.15))),
+            wo,
+        );
         chi2("rough plastic 0.1", &bsdf(&rough_plastic(0.8, 0.1, false)), wo);
         chi2("rough plastic 0.5", &bsdf(&rough_plastic(0.3, 0.5, true)), wo);
         chi2(
@@ -223,6 +234,12 @@ fn microfacet_lobes_sample_their_density() {
         chi2("rough glass 0.6", &bsdf(&glass(0.6)), wo);
         chi2("beckmann glass 0.3", &bsdf(&beckmann(glass(0.3))), wo);
         chi2("beckmann glass 0.6", &bsdf(&beckmann(glass(0.6))), wo);
+        chi2("anisotropic glass 0.2/0.5", &bsdf(&anisotropic(glass(0.2), 0.5)), wo);
+        chi2(
+            "anisotropic beckmann glass 0.4/0.1",
+            &bsdf(&beckmann(anisotropic(glass(0.4), 0.1))),
+            wo,
+        );
     }
 }
 
@@ -238,6 +255,8 @@ fn reflection_is_reciprocal() {
         plastic(0.7),
         rough_plastic(0.7, 0.2, false),
         beckmann(rough_plastic(0.7, 0.4, true)),
+        anisotropic(gold(0.1), 0.4),
+        beckmann(anisotropic(gold(0.4), 0.1)),
         glass(0.4),
     ];
     for m in &materials {
@@ -293,6 +312,7 @@ fn no_bsdf_reflects_more_than_it_receives() {
         ("rough plastic white", rough_plastic(1.0, 0.3, false)),
         ("rough plastic white, nonlinear", rough_plastic(1.0, 0.05, true)),
         ("beckmann rough plastic white", beckmann(rough_plastic(1.0, 0.6, false))),
+        ("anisotropic gold", anisotropic(gold(0.1), 0.5)),
     ];
     for (name, m) in &cases {
         let b = bsdf(m);

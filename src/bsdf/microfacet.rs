@@ -16,22 +16,38 @@ use std::f32::consts::PI;
 pub const SMOOTH_ALPHA: f32 = 1.0e-4;
 
 /// A distribution with roughness `alpha` (the slope's standard deviation
-/// scale; the `alpha` of Mitsuba and pbrt, not a "perceptual" roughness).
+/// scale; the `alpha` of Mitsuba and pbrt, not a "perceptual" roughness),
+/// possibly anisotropic: `alpha` along the frame's x axis (the surface's
+/// `∂p/∂u`), `alpha_y` along its y axis (Mitsuba's `alpha_u`, `alpha_v`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     /// GGX or Beckmann.
     pub distribution: MicrofacetDistribution,
-    /// Roughness.
+    /// Roughness along x.
     pub alpha: f32,
+    /// Roughness along y (`alpha` when isotropic).
+    pub alpha_y: f32,
 }
 
 impl Microfacet {
+    /// An isotropic `distribution` of roughness `alpha`.
+    pub fn isotropic(distribution: MicrofacetDistribution, alpha: f32) -> Self {
+        Self {
+            distribution,
+            alpha,
+            alpha_y: alpha,
+        }
+    }
+
     /// GGX of roughness `alpha`.
     pub fn ggx(alpha: f32) -> Self {
-        Self {
-            distribution: MicrofacetDistribution::Ggx,
-            alpha,
-        }
+        Self::isotropic(MicrofacetDistribution::Ggx, alpha)
+    }
+
+    /// Roughness differs along x and y.
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        self.alpha != self.alpha_y
     }
 
     /// Density of microfacet normals `m` (per steradian, projected:
@@ -40,16 +56,32 @@ impl Microfacet {
         if m.z <= 0.0 {
             return 0.0;
         }
-        let a2 = self.alpha * self.alpha;
-        let d = match self.distribution {
-            MicrofacetDistribution::Ggx => {
-                let s = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-                1.0 / (PI * a2 * s * s)
+        let d = if self.is_anisotropic() {
+            // x²/αx² + y²/αy² is tan²θ/α(φ)² times cos²θ.
+            let (ax, ay) = (self.alpha, self.alpha_y);
+            let slopes = (m.x / ax) * (m.x / ax) + (m.y / ay) * (m.y / ay);
+            match self.distribution {
+                MicrofacetDistribution::Ggx => {
+                    let s = slopes + m.z * m.z;
+                    1.0 / (PI * ax * ay * s * s)
+                }
+                MicrofacetDistribution::Beckmann => {
+                    let cos2 = m.z * m.z;
+                    (-slopes / cos2).exp() / (PI * ax * ay * cos2 * cos2)
+                }
             }
-            MicrofacetDistribution::Beckmann => {
-                let cos2 = m.z * m.z;
-                let tan2 = (m.x * m.x + m.y * m.y) / cos2;
-                (-tan2 / a2).exp() / (PI * a2 * cos2 * cos2)
+        } else {
+            let a2 = self.alpha * self.alpha;
+            match self.distribution {
+                MicrofacetDistribution::Ggx => {
+                    let s = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+                    1.0 / (PI * a2 * s * s)
+                }
+                MicrofacetDistribution::Beckmann => {
+                    let cos2 = m.z * m.z;
+                    let tan2 = (m.x * m.x + m.y * m.y) / cos2;
+                    (-tan2 / a2).exp() / (PI * a2 * cos2 * cos2)
+                }
             }
         };
         // Far tails underflow to garbage in f32; they carry no energy.
@@ -66,7 +98,12 @@ impl Microfacet {
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
-        let xy = self.alpha * self.alpha * (v.x * v.x + v.y * v.y);
+        // α(φ)² tan²θ, with α(φ)² = cos²φ αx² + sin²φ αy².
+        let xy = if self.is_anisotropic() {
+            self.alpha * self.alpha * v.x * v.x + self.alpha_y * self.alpha_y * v.y * v.y
+        } else {
+            self.alpha * self.alpha * (v.x * v.x + v.y * v.y)
+        };
         if xy == 0.0 {
             return 1.0;
         }
@@ -111,6 +148,14 @@ impl Microfacet {
     pub fn sample_normal(&self, v: Vec3A, u: Vec2) -> Vec3A {
         match self.distribution {
             MicrofacetDistribution::Ggx => self.sample_visible_ggx(v, u),
+            MicrofacetDistribution::Beckmann if self.is_anisotropic() => {
+                // Slopes of the stretched Gaussian: the isotropic sample's
+                // slope scaled by αx, αy (D cos θm stays the density).
+                let r = (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()).sqrt();
+                let phi = 2.0 * PI * u.y;
+                let (sx, sy) = (self.alpha * r * phi.cos(), self.alpha_y * r * phi.sin());
+                Vec3A::new(-sx, -sy, 1.0).normalize()
+            }
             MicrofacetDistribution::Beckmann => {
                 // tan² θm = −α² ln(1 − u) (Walter et al. 2007, eq. 28).
                 let tan2 = -self.alpha * self.alpha * (1.0 - u.x).max(f32::MIN_POSITIVE).ln();
@@ -125,7 +170,7 @@ impl Microfacet {
     fn sample_visible_ggx(&self, v: Vec3A, u: Vec2) -> Vec3A {
         let v = if v.z < 0.0 { -v } else { v };
         // To the hemisphere configuration (Heitz 2018, §3.2).
-        let vh = Vec3A::new(self.alpha * v.x, self.alpha * v.y, v.z).normalize();
+        let vh = Vec3A::new(self.alpha * v.x, self.alpha_y * v.y, v.z).normalize();
         let len2 = vh.x * vh.x + vh.y * vh.y;
         let t1 = if len2 > 0.0 {
             Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt()
@@ -141,7 +186,7 @@ impl Microfacet {
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
         let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
         // Back to the ellipsoid configuration (§3.4).
-        Vec3A::new(self.alpha * nh.x, self.alpha * nh.y, nh.z.max(1.0e-6)).normalize()
+        Vec3A::new(self.alpha * nh.x, self.alpha_y * nh.y, nh.z.max(1.0e-6)).normalize()
     }
 }
 
@@ -154,11 +199,22 @@ mod tests {
     #[test]
     fn d_is_normalised_and_visible_normals_integrate_to_one() {
         let mut rng = Rng::new(3, Domain::Analysis, 0, 0);
-        for (alpha, distribution) in [0.05f32, 0.2, 0.6, 1.0]
-            .into_iter()
-            .flat_map(|a| [(a, MicrofacetDistribution::Ggx), (a, MicrofacetDistribution::Beckmann)])
+        for ((alpha, alpha_y), distribution) in [
+            (0.05f32, 0.05f32),
+            (0.2, 0.2),
+            (0.6, 0.6),
+            (1.0, 1.0),
+            (0.2, 0.6),
+            (0.7, 0.25),
+        ]
+        .into_iter()
+        .flat_map(|a| [(a, MicrofacetDistribution::Ggx), (a, MicrofacetDistribution::Beckmann)])
         {
-            let g = Microfacet { distribution, alpha };
+            let g = Microfacet {
+                distribution,
+                alpha,
+                alpha_y,
+            };
             let n = 400_000;
             // ∫ D(m) cos θm dm by uniform sphere sampling.
             let mut projected = 0.0f64;

@@ -209,11 +209,17 @@ fn mean(c: Vec3A) -> f32 {
     (c.x + c.y + c.z) / 3.0
 }
 
-fn rough_or_smooth(roughness: f32, distribution: crate::scene::MicrofacetDistribution) -> Option<Microfacet> {
-    (roughness >= SMOOTH_ALPHA).then_some(Microfacet {
-        distribution,
-        alpha: roughness,
-    })
+/// The microfacets of roughness `u` (along `∂p/∂u`) and `v` (across it;
+/// `None`: isotropic), or `None` for a smooth surface.
+fn rough_or_smooth(u: f32, v: Option<f32>, distribution: crate::scene::MicrofacetDistribution) -> Option<Microfacet> {
+    match v {
+        None => (u >= SMOOTH_ALPHA).then_some(Microfacet::isotropic(distribution, u)),
+        Some(v) => (u.max(v) >= SMOOTH_ALPHA).then_some(Microfacet {
+            distribution,
+            alpha: u.max(SMOOTH_ALPHA),
+            alpha_y: v.max(SMOOTH_ALPHA),
+        }),
+    }
 }
 
 impl<'a> Bsdf<'a> {
@@ -229,7 +235,7 @@ impl<'a> Bsdf<'a> {
         if let Some(d) = m.dielectric {
             b.two_sided = false;
             let tint = d.tint;
-            let lobe = match rough_or_smooth(d.roughness, m.microfacet) {
+            let lobe = match rough_or_smooth(d.roughness, m.roughness_v, m.microfacet) {
                 None if d.thin => Lobe::ThinDielectric(ThinDielectric {
                     eta: d.ior,
                     tint,
@@ -248,7 +254,7 @@ impl<'a> Bsdf<'a> {
             };
             b.push(lobe, 1.0);
         } else if let Some(c) = m.conductor {
-            let lobe = match rough_or_smooth(c.roughness, m.microfacet) {
+            let lobe = match rough_or_smooth(c.roughness, m.roughness_v, m.microfacet) {
                 None => Lobe::SmoothConductor(SmoothConductor { eta: c.eta, k: c.k }),
                 Some(microfacet) => Lobe::RoughConductor(RoughConductor {
                     eta: c.eta,
@@ -258,7 +264,7 @@ impl<'a> Bsdf<'a> {
             };
             b.push(lobe, 1.0);
         } else if let Some(c) = &m.coating {
-            let lobe = match rough_or_smooth(c.roughness, m.microfacet) {
+            let lobe = match rough_or_smooth(c.roughness, None, m.microfacet) {
                 None => Lobe::Plastic(Plastic {
                     kd: m.diffuse,
                     eta: c.ior,
@@ -330,6 +336,26 @@ impl<'a> Bsdf<'a> {
 
     fn total_weight(&self) -> f32 {
         self.lobes().iter().map(|(_, w)| w).sum()
+    }
+
+    /// Has an anisotropic lobe: its local frame must follow the surface's
+    /// tangent (`∂p/∂u`), not any frame about the normal.
+    pub fn is_anisotropic(&self) -> bool {
+        self.lobes().iter().any(|(l, _)| match l {
+            Lobe::RoughConductor(c) => c.microfacet.is_anisotropic(),
+            Lobe::RoughDielectric(d) => d.microfacet.is_anisotropic(),
+            _ => false,
+        })
+    }
+
+    /// The local frame this BSDF works in about the shading normal `ns`:
+    /// anisotropic lobes follow the tangent `dpdu`, the rest any frame.
+    pub fn frame(&self, ns: Vec3A, dpdu: Vec3A) -> crate::math::Frame {
+        if self.is_anisotropic() {
+            crate::math::Frame::from_normal_tangent(ns, dpdu)
+        } else {
+            crate::math::Frame::from_normal(ns)
+        }
     }
 
     /// Scatters nothing (a black material).

@@ -225,7 +225,7 @@ mod tests {
     fn tables_are_fractions_for_both_distributions() {
         for distribution in [MicrofacetDistribution::Ggx, MicrofacetDistribution::Beckmann] {
             for alpha in [0.01, 0.3, 1.0] {
-                let t = coating_table(1.49, Microfacet { distribution, alpha });
+                let t = coating_table(1.49, Microfacet::isotropic(distribution, alpha));
                 assert!(t.transmittance.iter().all(|x| (0.0..=1.0).contains(x)), "{t:?}");
                 assert!((0.0..1.0).contains(&t.internal_reflectance), "{t:?}");
                 // Seen head-on, little more than the smooth interface's
@@ -348,7 +348,7 @@ mod tests {
             ),
         ];
         for (distribution, alpha, nonlinear, [to, po, ti, pi], expected, expected_pdf) in cases {
-            let microfacet = Microfacet { distribution, alpha };
+            let microfacet = Microfacet::isotropic(distribution, alpha);
             let table = coating_table(1.49 / 1.000277, microfacet);
             let kd = Vec3A::new(0.8, 0.4, 0.1);
             let lobe = RoughPlastic::new(kd, 1.49 / 1.000277, microfacet, nonlinear, &table);

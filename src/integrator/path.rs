@@ -46,7 +46,7 @@ use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
-use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec3A};
+use crate::math::{offset_ray_origin, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
 
 /// Power heuristic weight of a strategy of density `a` against one of density `b`.
@@ -306,7 +306,7 @@ impl<'a> PathTracer<'a> {
             if bsdf.is_black() {
                 break;
             }
-            let frame = Frame::from_normal(si.ns);
+            let frame = bsdf.frame(si.ns, si.dpdu);
             let wo_world = -ray.dir.normalize();
             let wo = frame.to_local(wo_world);
             // Which side of the geometric surface a direction leaves on,

@@ -333,7 +333,10 @@ impl<'a> Whitted<'a> {
         } else {
             self.scene.settings.ambient * m.ambient
         };
-        let frame = Frame::from_normal(ns);
+        let frame = match local {
+            Local::Bsdf(b) => b.frame(ns, si.dpdu),
+            _ => Frame::from_normal(ns),
+        };
         let f = |wi: Vec3A| match local {
             Local::Surface => brdf(m, ns, wi, wo),
             Local::Highlights => specular_lobe(m, ns, wi, wo),

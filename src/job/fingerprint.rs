@@ -219,6 +219,9 @@ fn kind_text(m: &crate::scene::Material) -> String {
     if m.dielectric.is_some_and(|d| d.thin) {
         text += " thin";
     }
+    if let Some(v) = m.roughness_v {
+        text += &format!(" roughness_v {v:?}");
+    }
     if let Some(c) = m.coating.as_ref().filter(|c| c.roughness > 0.0 || c.nonlinear) {
         text += &format!(" coating roughness {:?} nonlinear {}", c.roughness, c.nonlinear);
     }

@@ -23,6 +23,21 @@ impl Frame {
         Self { s, t, n }
     }
 
+    /// Frame whose `n` axis is the unit vector `n` and whose `s` axis is
+    /// `tangent` made orthogonal to it (Gram–Schmidt, Mitsuba's shading
+    /// frame from `∂p/∂u`); [`from_normal`](Self::from_normal) when the
+    /// tangent is zero or along `n`.
+    pub fn from_normal_tangent(n: Vec3A, tangent: Vec3A) -> Self {
+        let s = tangent - n * n.dot(tangent);
+        let len2 = s.length_squared();
+        let usable = len2.is_finite() && len2 > 1e-12 * tangent.length_squared().max(f32::MIN_POSITIVE);
+        if !usable {
+            return Self::from_normal(n);
+        }
+        let s = s / len2.sqrt();
+        Self { s, t: n.cross(s), n }
+    }
+
     /// World coordinates to local (`n` becomes +z).
     #[inline]
     pub fn to_local(&self, v: Vec3A) -> Vec3A {

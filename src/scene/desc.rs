@@ -371,6 +371,9 @@ pub struct DielectricDesc {
     pub tint: Option<Spanned<ParamDesc>>,
     /// GGX roughness (0: smooth).
     pub roughness: Option<Spanned<ParamDesc>>,
+    /// Roughness across the surface's `v` direction (anisotropic; `roughness`
+    /// is then the one along `u`).
+    pub roughness_v: Option<Spanned<ParamDesc>>,
     /// Fresnel formula.
     pub fresnel: Option<FresnelName>,
     /// A thin sheet: transmitted light passes straight through.
@@ -399,6 +402,9 @@ pub struct ConductorDesc {
     pub k: Option<Spanned<Vec3Desc>>,
     /// GGX roughness (0: smooth).
     pub roughness: Option<Spanned<ParamDesc>>,
+    /// Roughness across the surface's `v` direction (anisotropic; `roughness`
+    /// is then the one along `u`).
+    pub roughness_v: Option<Spanned<ParamDesc>>,
 }
 
 /// `[materials.NAME.blend]`: two materials of the scene mixed by a weight.

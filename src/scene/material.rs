@@ -209,6 +209,11 @@ pub struct Material {
     pub one_sided: bool,
     /// The distribution of the rough conductor's or dielectric's microfacets.
     pub microfacet: MicrofacetDistribution,
+    /// Anisotropic roughness: the rough conductor's or dielectric's `alpha`
+    /// across the surface's `v` direction, its `roughness` then being the
+    /// one along `∂p/∂u` (Mitsuba's `alpha_v` and `alpha_u`); `None`:
+    /// isotropic.
+    pub roughness_v: Option<f32>,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -300,6 +305,8 @@ pub struct MaterialTextures {
     pub dielectric_roughness: Option<Texture>,
     /// Replaces the conductor's roughness (scalar).
     pub conductor_roughness: Option<Texture>,
+    /// Replaces [`Material::roughness_v`] (scalar).
+    pub roughness_v: Option<Texture>,
     /// Multiplies [`Material::emission`] (which then holds the strength).
     pub emission: Option<Texture>,
     /// Perturbs the shading normal.
@@ -327,6 +334,7 @@ impl MaterialTextures {
             ("dielectric.tint", &self.dielectric_tint),
             ("dielectric.roughness", &self.dielectric_roughness),
             ("conductor.roughness", &self.conductor_roughness),
+            ("roughness_v", &self.roughness_v),
             ("emission", &self.emission),
         ]
         .into_iter()
@@ -370,6 +378,7 @@ impl Material {
             emission: Vec3A::ZERO,
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
+            roughness_v: None,
             textures: None,
             blend: None,
         }
@@ -431,7 +440,8 @@ impl Material {
     /// in a blend's layers.
     #[inline]
     pub fn uses_uv(&self) -> bool {
-        let own = self.textures.as_deref().is_some_and(|t| t.uses_uv());
+        // Anisotropic roughness is oriented by the tangent.
+        let own = self.textures.as_deref().is_some_and(|t| t.uses_uv()) || self.roughness_v.is_some();
         if self.blend.is_none() {
             return own;
         }
@@ -501,6 +511,7 @@ impl Material {
             emission: self.emission_at(uv),
             one_sided: self.one_sided,
             microfacet: self.microfacet,
+            roughness_v: self.roughness_v.map(|r| scalar(&t.roughness_v, r).max(0.0)),
             textures: None,
             blend: self.blend.clone(),
         }

@@ -558,7 +558,7 @@ impl PhotonTracer<'_> {
         if bsdf.is_black() {
             return Step::Done;
         }
-        let frame = Frame::from_normal(si.ns);
+        let frame = bsdf.frame(si.ns, si.dpdu);
         let wo_world = -ray.dir;
         let wo = frame.to_local(wo_world);
         let uc = path.rng.f32();

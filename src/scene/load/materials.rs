@@ -146,6 +146,8 @@ impl Ctx<'_> {
                 Some(Mirror { reflectivity, tint })
             }
         };
+        // Anisotropic roughness, of the dielectric or the conductor.
+        let mut roughness_v = None;
         let dielectric = match &m.dielectric {
             None => None,
             Some(s) => {
@@ -177,6 +179,13 @@ impl Ctx<'_> {
                     return Err(self.invalid(at, "a thin dielectric is smooth: remove `roughness` or `thin`"));
                 }
                 (textures.dielectric_tint, textures.dielectric_roughness) = (tint_tex, roughness_tex);
+                if let Some(r) = &d.roughness_v {
+                    if thin {
+                        return Err(self.invalid(r.span(), "a thin dielectric is smooth: remove `roughness_v`"));
+                    }
+                    let (v, v_tex) = self.roughness(&d.roughness_v)?;
+                    (roughness_v, textures.roughness_v) = (Some(v), v_tex);
+                }
                 Some(Dielectric {
                     thin,
                     ior,
@@ -230,6 +239,10 @@ impl Ctx<'_> {
                     };
                 let (roughness, roughness_tex) = self.roughness(&c.roughness)?;
                 textures.conductor_roughness = roughness_tex;
+                if c.roughness_v.is_some() {
+                    let (v, v_tex) = self.roughness(&c.roughness_v)?;
+                    (roughness_v, textures.roughness_v) = (Some(v), v_tex);
+                }
                 Some(Conductor { eta, k, roughness })
             }
         };
@@ -366,6 +379,7 @@ impl Ctx<'_> {
             emission,
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
+            roughness_v,
             blend: None,
         })
     }

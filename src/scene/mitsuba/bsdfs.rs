@@ -50,7 +50,7 @@ impl Builder<'_> {
                 let (tint, tint_texture) =
                     self.colour(p, "specular_transmittance", Vec3A::ONE, SpectrumUse::Reflectance)?;
                 textures.dielectric_tint = tint_texture;
-                let roughness = self.rough_part(p, &mut m, &mut textures.dielectric_roughness)?;
+                let roughness = self.rough_part(p, &mut m, &mut textures, |t| &mut t.dielectric_roughness)?;
                 m.dielectric = Some(Dielectric {
                     ior: eta,
                     tint,
@@ -78,7 +78,7 @@ impl Builder<'_> {
             "conductor" | "roughconductor" => {
                 let (eta, k) = conductor_ior(self, p)?;
                 unit_reflectance(p)?;
-                let roughness = self.rough_part(p, &mut m, &mut textures.conductor_roughness)?;
+                let roughness = self.rough_part(p, &mut m, &mut textures, |t| &mut t.conductor_roughness)?;
                 m.conductor = Some(Conductor { eta, k, roughness });
             }
             "plastic" | "roughplastic" => {
@@ -88,14 +88,17 @@ impl Builder<'_> {
                 unit_reflectance(p)?;
                 let ior = interior_over_exterior(p, POLYPROPYLENE)?;
                 let roughness = if p.kind == "roughplastic" {
-                    let (alpha, texture, distribution) = self.roughness(p)?;
-                    if texture.is_some() {
+                    let r = self.roughness(p)?;
+                    if r.texture.is_some() {
                         // Mitsuba's roughplastic takes a number: its
                         // transmittance table is computed once.
                         return Err(p.error("a textured `alpha` is not supported by roughplastic"));
                     }
-                    m.microfacet = distribution;
-                    alpha
+                    if r.v.is_some() {
+                        return Err(p.error("roughplastic is isotropic (as in Mitsuba): `alpha_u` must equal `alpha_v`"));
+                    }
+                    m.microfacet = r.distribution;
+                    r.alpha
                 } else {
                     0.0
                 };
@@ -195,27 +198,30 @@ impl Builder<'_> {
     }
 
     /// The roughness of `rough*` plugins (0 for the smooth ones): sets the
-    /// material's distribution and the roughness texture `slot`.
+    /// material's distribution, its roughness across `v` when anisotropic,
+    /// and the roughness texture `slot` (the `v` one in `textures`).
     fn rough_part(
         &self,
         p: &Plugin,
         m: &mut Material,
-        slot: &mut Option<crate::texture::Texture>,
+        textures: &mut MaterialTextures,
+        slot: fn(&mut MaterialTextures) -> &mut Option<crate::texture::Texture>,
     ) -> Result<f32, SceneError> {
         if !p.kind.starts_with("rough") {
             return Ok(0.0);
         }
-        let (alpha, texture, distribution) = self.roughness(p)?;
-        *slot = texture;
-        m.microfacet = distribution;
-        Ok(alpha)
+        let r = self.roughness(p)?;
+        *slot(textures) = r.texture;
+        m.microfacet = r.distribution;
+        if let Some((v, v_texture)) = r.v {
+            m.roughness_v = Some(v);
+            textures.roughness_v = v_texture;
+        }
+        Ok(r.alpha)
     }
 
-    /// The `alpha` and distribution of a rough plugin (isotropic).
-    fn roughness(
-        &self,
-        p: &Plugin,
-    ) -> Result<(f32, Option<crate::texture::Texture>, MicrofacetDistribution), SceneError> {
+    /// The `alpha` (or `alpha_u` and `alpha_v`) and distribution of a rough plugin.
+    fn roughness(&self, p: &Plugin) -> Result<Roughness, SceneError> {
         let distribution = match p.choice("distribution", "beckmann", &["beckmann", "ggx"])? {
             "ggx" => MicrofacetDistribution::Ggx,
             _ => MicrofacetDistribution::Beckmann,
@@ -228,16 +234,37 @@ impl Builder<'_> {
             }
             let (u, tu) = self.scalar(p, "alpha_u", 0.1)?;
             let (v, tv) = self.scalar(p, "alpha_v", 0.1)?;
-            if u != v || tu != tv {
-                return Err(p.error("anisotropic roughness (`alpha_u` ≠ `alpha_v`) is not supported"));
-            }
             check_alpha(p, u)?;
-            return Ok((u, tu, distribution));
+            check_alpha(p, v)?;
+            let isotropic = u == v && tu == tv;
+            return Ok(Roughness {
+                alpha: u,
+                texture: tu,
+                v: (!isotropic).then_some((v, tv)),
+                distribution,
+            });
         }
         let (alpha, texture) = self.scalar(p, "alpha", 0.1)?;
         check_alpha(p, alpha)?;
-        Ok((alpha, texture, distribution))
+        Ok(Roughness {
+            alpha,
+            texture,
+            v: None,
+            distribution,
+        })
     }
+}
+
+/// What a rough plugin's roughness parameters say.
+struct Roughness {
+    /// `alpha`, or `alpha_u` along `∂p/∂u`.
+    alpha: f32,
+    /// Its texture.
+    texture: Option<crate::texture::Texture>,
+    /// `alpha_v` and its texture, when they differ from `alpha_u`.
+    v: Option<(f32, Option<crate::texture::Texture>)>,
+    /// The microfacet distribution.
+    distribution: MicrofacetDistribution,
 }
 
 /// Makes `m` and every side of its blends scatter on both sides.

@@ -120,9 +120,21 @@ impl Builder<'_> {
                     transform,
                 })
             }
+            "rawconstant" => {
+                // A value used as it is, never converted as a colour.
+                let value = match p.take("value").map(|e| e.tag.as_str()) {
+                    Some("point" | "vector") => Vec3A::from(p.vector("value")?.expect("present")),
+                    Some(_) => Vec3A::splat(p.float("value")?.expect("present")),
+                    None => Vec3A::ONE,
+                };
+                if p.has("to_uv") {
+                    p.transform("to_uv")?;
+                }
+                Texture::Constant(value)
+            }
             other => {
                 return Err(p.error(format!(
-                    "the texture `{other}` is not supported: caustic reads `bitmap` and `checkerboard`"
+                    "the texture `{other}` is not supported: caustic reads `bitmap`, `checkerboard` and `rawconstant`"
                 )))
             }
         };
