@@ -20,6 +20,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
 pub mod microfacet;
+pub mod null;
 pub mod phong;
 pub mod plastic;
 pub mod specular;
@@ -32,6 +33,7 @@ use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
 use dielectric::{RoughDielectric, SmoothDielectric};
 use microfacet::{Microfacet, SMOOTH_ALPHA};
+use null::Null;
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
 
@@ -102,6 +104,7 @@ enum Lobe {
     SmoothConductor(SmoothConductor),
     RoughConductor(RoughConductor),
     Plastic(Plastic),
+    Null(Null),
 }
 
 impl Lobe {
@@ -112,7 +115,7 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.eval(wo, wi, transport),
             Lobe::RoughConductor(c) => c.eval(wo, wi),
             Lobe::Plastic(p) => p.eval(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => Vec3A::ZERO,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => Vec3A::ZERO,
         }
     }
 
@@ -123,7 +126,7 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.pdf(wo, wi),
             Lobe::RoughConductor(c) => c.pdf(wo, wi),
             Lobe::Plastic(p) => p.pdf(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 0.0,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => 0.0,
         }
     }
 
@@ -137,13 +140,14 @@ impl Lobe {
             Lobe::SmoothConductor(c) => c.sample(wo),
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
+            Lobe::Null(n) => n.sample(wo),
         }
     }
 
     /// Probability that [`Lobe::sample`] returns a delta direction.
     fn delta_probability(&self, wo: Vec3A) -> f32 {
         match self {
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) => 1.0,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => 1.0,
             Lobe::Plastic(p) => p.delta_probability(wo),
             _ => 0.0,
         }
@@ -153,7 +157,7 @@ impl Lobe {
     fn is_smooth_only(&self) -> bool {
         matches!(
             self,
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_)
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_)
         )
     }
 }
@@ -195,7 +199,10 @@ impl Bsdf {
             two_sided: !m.one_sided,
             transport,
         };
-        if let Some(d) = m.dielectric {
+        if m.null {
+            b.two_sided = false;
+            b.push(Lobe::Null(Null), 1.0);
+        } else if let Some(d) = m.dielectric {
             b.two_sided = false;
             let tint = d.tint;
             let lobe = match rough_or_smooth(d.roughness, m.microfacet) {
@@ -285,7 +292,12 @@ impl Bsdf {
     pub fn has_delta_lobe(&self) -> bool {
         self.lobes()
             .iter()
-            .any(|(l, _)| l.is_smooth_only() || matches!(l, Lobe::Plastic(_)))
+            .any(|(l, _)| (l.is_smooth_only() && !matches!(l, Lobe::Null(_))) || matches!(l, Lobe::Plastic(_)))
+    }
+
+    /// Mitsuba's `null` BSDF: rays pass straight through, nothing scatters.
+    pub fn is_null(&self) -> bool {
+        matches!(self.lobes(), [(Lobe::Null(_), _)])
     }
 
     /// True when [`sample`](Self::sample) with the same `wo` and `uc` picks

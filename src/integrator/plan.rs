@@ -749,6 +749,7 @@ mod tests {
             material,
         };
         Scene {
+            media: Default::default(),
             settings: RenderSettings {
                 spp,
                 sharing,

@@ -162,6 +162,16 @@ fn fingerprint_of(
         }
     }
     field("objects", format!("{:?}", scene.objects).as_bytes());
+    // Null surfaces and media, only where there are some (the fingerprint
+    // of a scene in vacuum is the one before media existed).
+    for (i, m) in scene.materials.iter().enumerate() {
+        if m.null {
+            field("material null", format!("material {i}").as_bytes());
+        }
+    }
+    if !scene.media.is_empty() {
+        field("media", format!("{:?}", scene.media).as_bytes());
+    }
     for mesh in &scene.meshes {
         // Geometry only: moving or renaming the mesh file does not matter.
         let floats = mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.to_array());

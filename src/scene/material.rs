@@ -136,6 +136,11 @@ pub struct Material {
     pub one_sided: bool,
     /// The distribution of the rough conductor's or dielectric's microfacets.
     pub microfacet: MicrofacetDistribution,
+    /// Mitsuba's `null` BSDF: the surface scatters nothing and every ray
+    /// passes straight through it (a delta transmission of weight 1 and
+    /// index ratio 1), the index-matched boundary of a medium. The other
+    /// scattering fields are then unused.
+    pub null: bool,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -260,6 +265,7 @@ impl Material {
             emission: Vec3A::ZERO,
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
+            null: false,
             textures: None,
         }
     }
@@ -322,6 +328,7 @@ impl Material {
             emission: self.emission_at(uv),
             one_sided: self.one_sided,
             microfacet: self.microfacet,
+            null: self.null,
             textures: None,
         }
     }

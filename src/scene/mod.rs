@@ -10,6 +10,7 @@ pub mod ior;
 pub mod light;
 pub mod load;
 pub mod material;
+pub mod media;
 pub mod medium;
 pub mod metals;
 pub mod mitsuba;
@@ -30,6 +31,7 @@ pub use material::{
     AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution,
     Mirror, NormalMap, ShadingModel,
 };
+pub use media::{HomogeneousMedium, Media, MediumInterface, PhaseFunction};
 pub use medium::Medium;
 
 /// Loads a scene file, choosing the format by extension: `.xml` is a
@@ -321,6 +323,10 @@ pub struct Scene {
     pub meshes: Vec<Arc<Mesh>>,
     /// Objects (the top-level instances).
     pub objects: Vec<Object>,
+    /// Participating media bounded by the objects (Mitsuba's `<medium>`);
+    /// empty: the scene is in vacuum (the TOML water's medium is
+    /// `settings.medium`).
+    pub media: Media,
 }
 
 /// Shading data at a hit, in world space.

@@ -320,6 +320,7 @@ mod tests {
             ),
         ];
         Scene {
+            media: Default::default(),
             settings: RenderSettings {
                 width: 64,
                 height: 48,

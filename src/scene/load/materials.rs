@@ -272,6 +272,7 @@ impl Ctx<'_> {
             emission,
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
+            null: false,
         })
     }
 

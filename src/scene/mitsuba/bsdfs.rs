@@ -77,6 +77,11 @@ impl Builder<'_> {
                     ior: interior_over_exterior(p, POLYPROPYLENE)?,
                 });
             }
+            "null" => {
+                // Scatters nothing; rays pass straight through (`src/bsdfs/null.cpp`).
+                m.null = true;
+                m.one_sided = false;
+            }
             "twosided" => {
                 let inner = p.children_of("bsdf")?;
                 let [(inner, _)] = <[_; 1]>::try_from(inner).map_err(|v: Vec<_>| {
@@ -115,7 +120,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, null, twosided and normalmap"
                 )))
             }
         }

@@ -13,6 +13,7 @@
 mod bsdfs;
 mod cie;
 mod emitters;
+mod media;
 pub mod props;
 mod sensor;
 mod shapes;
@@ -62,6 +63,9 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         mesh_sources: Vec::new(),
         mesh_index: HashMap::new(),
         objects: Vec::new(),
+        interfaces: Vec::new(),
+        media: Vec::new(),
+        medium_index: HashMap::new(),
         images: RefCell::new(HashMap::new()),
     };
     let mut settings = RenderSettings {
@@ -72,6 +76,9 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     let mut lights = Vec::new();
     let mut sensor = None;
     let mut integrator_seen: Option<&Origin> = None;
+    // Mitsuba's default integrator is `path`, which ignores media.
+    let mut media_handling = sensor::MediaHandling::Ignored;
+    let mut camera_medium = None;
     for e in &doc.root.children {
         if ids.is_referenced(e) {
             // A definition, instantiated where it is referenced.
@@ -84,7 +91,17 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                         .origin
                         .error("the scene has several sensors; caustic renders one camera"));
                 }
-                sensor = Some(sensor::sensor(&Plugin::new(e, &ids)?)?);
+                let plugin = Plugin::new(e, &ids)?;
+                // The medium the camera is in: Mitsuba takes any one medium
+                // object of the sensor, whatever its name.
+                let media = plugin.children_of("medium")?;
+                if let Some((_, second)) = media.get(1) {
+                    return Err(second.origin.error("a sensor takes at most one <medium>"));
+                }
+                if let Some((m, _)) = media.first() {
+                    camera_medium = Some(b.medium(m)?);
+                }
+                sensor = Some(sensor::sensor(&plugin)?);
             }
             "integrator" => {
                 if let Some(first) = integrator_seen {
@@ -94,16 +111,17 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                     )));
                 }
                 integrator_seen = Some(&e.origin);
-                sensor::integrator(&Plugin::new(e, &ids)?, &mut settings, &mut warnings)?;
+                media_handling = sensor::integrator(&Plugin::new(e, &ids)?, &mut settings, &mut warnings)?;
             }
             "shape" => b.shape(&Plugin::new(e, &ids)?)?,
             "emitter" => lights.push(b.emitter(&Plugin::new(e, &ids)?)?),
             // Definitions, used through <ref>.
             "bsdf" | "texture" | "spectrum" | "rfilter" | "film" | "sampler" => {}
             "medium" | "phase" | "volume" => {
-                return Err(e
-                    .origin
-                    .error(format!("<{}>: participating media are not supported yet", e.tag)))
+                return Err(e.origin.error(format!(
+                    "<{}> is not referenced: a medium is used through a shape's `interior` / `exterior` or the sensor",
+                    e.tag
+                )))
             }
             other => {
                 return Err(e.origin.error(format!(
@@ -131,8 +149,36 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     let meshes = b.load_meshes()?;
     let mesh_seconds = meshes_start.elapsed().as_secs_f64();
     let Builder {
-        materials, mut objects, ..
+        materials,
+        mut objects,
+        interfaces,
+        media,
+        ..
     } = b;
+    let media = match media_handling {
+        sensor::MediaHandling::Rendered => crate::scene::Media {
+            interfaces: if media.is_empty() { Vec::new() } else { interfaces },
+            list: media,
+            camera: camera_medium,
+        },
+        sensor::MediaHandling::Ignored => {
+            let at = integrator_seen.unwrap_or(&doc.root.origin);
+            if let Some(m) = materials.iter().find(|m| m.null) {
+                return Err(at.error(format!(
+                    "the `null` BSDF (`{}`) is rendered only with `volpath` / `volpathmis`: Mitsuba's `path` and `direct` stop emitter sampling at it yet weigh the light seen through it against that sampling",
+                    m.name
+                )));
+            }
+            if !media.is_empty() {
+                warnings.push(format!(
+                    "{}:{}: the integrator ignores participating media (as Mitsuba's `path` and `direct` do); `volpath` renders them",
+                    at.file.display(),
+                    at.place
+                ));
+            }
+            crate::scene::Media::default()
+        }
+    };
     for o in &mut objects {
         if let Shape::Mesh { mesh, smooth, .. } = &mut o.shape {
             // A `.serialized` shape's flags may ask for face normals.
@@ -154,6 +200,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         lights,
         meshes: meshes.meshes,
         objects,
+        media,
     };
     if scene.objects.is_empty() && scene.lights.is_empty() {
         return Err(doc.root.origin.error("the scene has no shape and no emitter"));
@@ -212,6 +259,12 @@ struct Builder<'a> {
     mesh_sources: Vec<MeshSource>,
     mesh_index: HashMap<(PathBuf, Option<u32>, bool, bool), u32>,
     objects: Vec<Object>,
+    /// Per object, the media on its sides.
+    interfaces: Vec<crate::scene::MediumInterface>,
+    /// The media the shapes and the sensor name.
+    media: Vec<crate::scene::HomogeneousMedium>,
+    /// `<medium>` element → index in `media`.
+    medium_index: HashMap<usize, u32>,
     images: RefCell<HashMap<(PathBuf, ColourSpace), Arc<Image>>>,
 }
 

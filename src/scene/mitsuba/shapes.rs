@@ -10,7 +10,7 @@ use super::{Builder, MeshSource};
 use crate::geometry::Mesh;
 use crate::math::{Transform, Vec2, Vec3, Vec3A};
 use crate::scene::load::SceneError;
-use crate::scene::{Material, Object, Quad, Shape, Sphere};
+use crate::scene::{Material, MediumInterface, Object, Quad, Shape, Sphere};
 use glam::{Affine3A, Mat4};
 
 /// Mitsuba's `cube`: 24 vertices (4 per face, with the face's normal and
@@ -54,9 +54,10 @@ const CUBE_UVS: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
 impl Builder<'_> {
     /// Adds a `<shape>`'s object.
     pub(super) fn shape(&mut self, p: &Plugin) -> Result<(), SceneError> {
-        if !p.children_of("medium")?.is_empty() {
-            return Err(p.error("participating media (`interior` / `exterior`) are not supported yet"));
-        }
+        let interface = MediumInterface {
+            interior: self.shape_medium(p, "interior")?,
+            exterior: self.shape_medium(p, "exterior")?,
+        };
         let material = self.shape_material(p)?;
         let name = p
             .element
@@ -182,7 +183,22 @@ impl Builder<'_> {
         };
         p.finish()?;
         self.objects.push(Object { name, shape, material });
+        self.interfaces.push(interface);
         Ok(())
+    }
+
+    /// The medium a shape names `side` (`interior` or `exterior`), nested
+    /// or referenced.
+    fn shape_medium(&mut self, p: &Plugin, side: &str) -> Result<Option<u32>, SceneError> {
+        match p.child_named(side)? {
+            None => Ok(None),
+            Some(m) if m.element.tag != "medium" => Err(m.error(format!(
+                "`{side}` of {} must be a <medium>, not a <{}>",
+                p.what(),
+                m.element.tag
+            ))),
+            Some(m) => self.medium(&m).map(Some),
+        }
     }
 
     /// The material of a shape: its BSDF (or Mitsuba's default) and the
