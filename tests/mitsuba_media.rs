@@ -276,3 +276,34 @@ fn media_renders_are_the_same_on_any_thread_count() {
     assert!(one.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(one, three);
 }
+
+/// A thin dielectric sheet (Mitsuba's `thindielectric`, η = 1.5) between a
+/// point light and a small diffuse patch: shadow rays pass it, carrying
+/// `1 − R'` with `R' = 2R / (1 + R)` and `R = 0.04` at normal incidence.
+#[test]
+fn shadow_rays_through_a_thin_dielectric_carry_its_transmittance() {
+    let sensor = r#"<sensor type="perspective"><float name="fov" value="1"/><transform name="to_world"><lookat origin="0, 0, 0.9" target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/><rfilter type="box"/></film><sampler type="independent"><integer name="sample_count" value="16"/></sampler></sensor>"#;
+    let body = r#"<shape type="rectangle"><transform name="to_world"><scale value="50"/><translate z="1.5"/></transform><bsdf type="thindielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1"/></bsdf></shape>
+<shape type="rectangle"><transform name="to_world"><scale value="0.05"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+<emitter type="point"><point name="position" x="0" y="0" z="4"/><rgb name="intensity" value="16"/></emitter>"#;
+    let text = scene_text("volpath", body).replace(SENSOR, sensor);
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
+    assert_eq!(
+        scene.materials[scene.objects[0].material as usize].thin_dielectric,
+        Some(1.5)
+    );
+    let m = mean(&render_pixels(&scene, 2));
+    let r = 0.04f32;
+    let expected = (1.0 - 2.0 * r / (1.0 + r)) * 0.5 / std::f32::consts::PI;
+    // The patch is small: light it sends back up and the sheet reflects
+    // onto it again is below 1e-4 of the direct light.
+    assert!(
+        (m - Vec3A::splat(expected)).abs().max_element() < 2e-3 * expected,
+        "{m} against (ρ/π)(I/d²)(1 − R') = {expected}"
+    );
+    // Mitsuba's `path` would weigh the light seen through the sheet against
+    // emitter sampling that cannot find it: refused.
+    let e = load_error("path", r#"<shape type="sphere"><bsdf type="thindielectric"/></shape>"#);
+    assert!(e.contains("scene.xml:2:1") && e.contains("thindielectric"), "{e}");
+}

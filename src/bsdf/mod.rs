@@ -24,6 +24,7 @@ pub mod null;
 pub mod phong;
 pub mod plastic;
 pub mod specular;
+pub mod thin;
 
 pub use crate::scene::FresnelModel;
 pub use specular::{fresnel_schlick, reflect, refract, DielectricInterface};
@@ -36,6 +37,7 @@ use microfacet::{Microfacet, SMOOTH_ALPHA};
 use null::Null;
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
+use thin::ThinDielectric;
 
 /// What a path carries: radiance from the camera, or power (importance)
 /// from a light (photons). Only refraction tells them apart.
@@ -105,6 +107,7 @@ enum Lobe {
     RoughConductor(RoughConductor),
     Plastic(Plastic),
     Null(Null),
+    Thin(ThinDielectric),
 }
 
 impl Lobe {
@@ -115,7 +118,9 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.eval(wo, wi, transport),
             Lobe::RoughConductor(c) => c.eval(wo, wi),
             Lobe::Plastic(p) => p.eval(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => Vec3A::ZERO,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) | Lobe::Thin(_) => {
+                Vec3A::ZERO
+            }
         }
     }
 
@@ -126,7 +131,9 @@ impl Lobe {
             Lobe::RoughDielectric(d) => d.pdf(wo, wi),
             Lobe::RoughConductor(c) => c.pdf(wo, wi),
             Lobe::Plastic(p) => p.pdf(wo, wi),
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => 0.0,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) | Lobe::Thin(_) => {
+                0.0
+            }
         }
     }
 
@@ -141,13 +148,16 @@ impl Lobe {
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
             Lobe::Null(n) => n.sample(wo),
+            Lobe::Thin(t) => t.sample(wo, uc),
         }
     }
 
     /// Probability that [`Lobe::sample`] returns a delta direction.
     fn delta_probability(&self, wo: Vec3A) -> f32 {
         match self {
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) => 1.0,
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) | Lobe::Thin(_) => {
+                1.0
+            }
             Lobe::Plastic(p) => p.delta_probability(wo),
             _ => 0.0,
         }
@@ -157,7 +167,7 @@ impl Lobe {
     fn is_smooth_only(&self) -> bool {
         matches!(
             self,
-            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_)
+            Lobe::Mirror(_) | Lobe::SmoothDielectric(_) | Lobe::SmoothConductor(_) | Lobe::Null(_) | Lobe::Thin(_)
         )
     }
 }
@@ -202,6 +212,9 @@ impl Bsdf {
         if m.null {
             b.two_sided = false;
             b.push(Lobe::Null(Null), 1.0);
+        } else if let Some(eta) = m.thin_dielectric {
+            b.two_sided = false;
+            b.push(Lobe::Thin(ThinDielectric { eta }), 1.0);
         } else if let Some(d) = m.dielectric {
             b.two_sided = false;
             let tint = d.tint;

@@ -152,6 +152,17 @@ pub enum MediumPlan {
         /// Henyey–Greenstein asymmetry.
         g: f32,
     },
+    /// Media bounded by objects, or null surfaces (Mitsuba's `volpath`):
+    /// the volumetric path tracer (`integrator::volpath`).
+    Bounded {
+        /// Homogeneous media.
+        media: usize,
+        /// Objects whose material is `null` or a thin dielectric (rays pass
+        /// straight through them).
+        null_objects: usize,
+        /// The camera starts in a medium.
+        camera_inside: bool,
+    },
     /// No `[medium]`, or the Whitted integrator (its exponential fog).
     None,
     /// A `[medium]` with the fog's keys only.
@@ -371,6 +382,18 @@ impl RenderPlan {
                 g: v.g,
             },
             Some(None) if path => MediumPlan::NoCoefficients,
+            _ if path && super::volpath::needs_volumetric(scene) => MediumPlan::Bounded {
+                media: scene.media.list.len(),
+                null_objects: scene
+                    .objects
+                    .iter()
+                    .filter(|o| {
+                        let m = &scene.materials[o.material as usize];
+                        m.null || m.thin_dielectric.is_some()
+                    })
+                    .count(),
+                camera_inside: scene.media.camera.is_some(),
+            },
             _ => MediumPlan::None,
         };
         let fog = match &s.medium {
@@ -680,6 +703,19 @@ impl RenderPlan {
             MediumPlan::NoCoefficients => stages.push(Stage::skipped(
                 "medium",
                 "[medium] gives no `absorption` and `scattering` (the fog is the Whitted integrator's)",
+            )),
+            MediumPlan::Bounded {
+                media,
+                null_objects,
+                camera_inside,
+            } => stages.push(Stage::ran(
+                "media",
+                format!(
+                    "{media} homogeneous medium(s), {null_objects} null or thin-dielectric object(s), the camera in {}; \
+                     volumetric path tracing: free flights, phase-function and light sampling, shadow rays \
+                     through null and thin-dielectric surfaces",
+                    if camera_inside { "a medium" } else { "vacuum" }
+                ),
             )),
             MediumPlan::None => {}
         }

@@ -18,7 +18,9 @@
 //! - **Null surfaces** pass the path straight on. As in Mitsuba they do not
 //!   count as bounces for `max_depth`, do not change which vertex the MIS
 //!   weight of a light reached later refers to (the last real scattering),
-//!   and let shadow rays through.
+//!   and let shadow rays through. A thin dielectric's straight-through
+//!   transmission is such a null event too (its reflection a delta bounce),
+//!   and multiplies shadow rays by `1 − R'`.
 //! - **Shadow rays** walk from surface to surface toward the light: through
 //!   null surfaces, multiplying the transmittance `exp(−σt d)` of every
 //!   medium segment (exact for homogeneous media, where Mitsuba tracks ratio
@@ -37,6 +39,7 @@ use super::path::power_heuristic;
 use super::plan::{RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
+use crate::bsdf::thin::ThinDielectric;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
@@ -52,7 +55,7 @@ const MAX_NULL_CROSSINGS: u32 = 1024;
 /// True when `scene` needs the volumetric path tracer: it has media or
 /// null surfaces.
 pub fn needs_volumetric(scene: &Scene) -> bool {
-    !scene.media.is_empty() || scene.materials.iter().any(|m| m.null)
+    !scene.media.is_empty() || scene.materials.iter().any(|m| m.null || m.thin_dielectric.is_some())
 }
 
 /// The volumetric path tracer over one scene and accelerator.
@@ -120,7 +123,13 @@ impl<'a> VolumePathTracer<'a> {
                 return Vec3A::ZERO;
             }
             let si = self.scene.surface_interaction(&ray, &hit);
-            if !self.scene.materials[si.material as usize].null {
+            let material = &self.scene.materials[si.material as usize];
+            if let Some(eta) = material.thin_dielectric {
+                // What a thin sheet lets straight through (Mitsuba's
+                // `eval_null_transmission`), at the shading normal's cosine.
+                let cos = ray.dir.normalize().dot(si.ns);
+                tr *= 1.0 - ThinDielectric { eta }.reflectance(cos);
+            } else if !material.null {
                 return Vec3A::ZERO;
             }
             let interface = self.scene.media.interface(si.object);
@@ -258,7 +267,10 @@ impl<'a> VolumePathTracer<'a> {
                 ray = Ray::new(origin, ray.dir);
                 continue;
             }
-            if depth >= self.max_depth {
+            // A thin sheet is sampled at any depth: going straight through
+            // it is a null event, not a bounce.
+            let sheet = material.thin_dielectric.is_some();
+            if depth >= self.max_depth && !sheet {
                 break;
             }
             let bsdf = Bsdf::for_material(material, FresnelModel::Exact, Transport::Radiance);
@@ -315,6 +327,20 @@ impl<'a> VolumePathTracer<'a> {
                 break;
             }
             beta *= s.weight();
+            if sheet && s.transmission {
+                // Through the sheet, unchanged: as a null surface.
+                null_crossings += 1;
+                if null_crossings > MAX_NULL_CROSSINGS {
+                    break;
+                }
+                medium = medium_toward(wi_world);
+                let origin = offset_ray_origin(si.p, si.p_error, si.ng, wi_world);
+                ray = Ray::new(origin, wi_world);
+                continue;
+            }
+            if depth >= self.max_depth {
+                break;
+            }
             specular = s.delta;
             scatter_pdf = s.pdf;
             scatter_point = si.p;

@@ -168,6 +168,12 @@ fn fingerprint_of(
         if m.null {
             field("material null", format!("material {i}").as_bytes());
         }
+        if let Some(eta) = m.thin_dielectric {
+            field(
+                "material thin dielectric",
+                format!("material {i}: eta {eta:?}").as_bytes(),
+            );
+        }
     }
     if !scene.media.is_empty() {
         field("media", format!("{:?}", scene.media).as_bytes());

@@ -141,6 +141,11 @@ pub struct Material {
     /// index ratio 1), the index-matched boundary of a medium. The other
     /// scattering fields are then unused.
     pub null: bool,
+    /// Mitsuba's `thindielectric`: a thin sheet of relative index `eta`
+    /// (inside over outside) that reflects `R' = 2R / (1 + R)` specularly
+    /// and lets the rest straight through (`bsdf::thin`). The other
+    /// scattering fields are then unused.
+    pub thin_dielectric: Option<f32>,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -266,6 +271,7 @@ impl Material {
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
             null: false,
+            thin_dielectric: None,
             textures: None,
         }
     }
@@ -329,6 +335,7 @@ impl Material {
             one_sided: self.one_sided,
             microfacet: self.microfacet,
             null: self.null,
+            thin_dielectric: self.thin_dielectric,
             textures: None,
         }
     }

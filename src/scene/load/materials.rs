@@ -273,6 +273,7 @@ impl Ctx<'_> {
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
             null: false,
+            thin_dielectric: None,
         })
     }
 

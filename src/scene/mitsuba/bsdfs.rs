@@ -77,6 +77,16 @@ impl Builder<'_> {
                     ior: interior_over_exterior(p, POLYPROPYLENE)?,
                 });
             }
+            "thindielectric" => {
+                m.thin_dielectric = Some(interior_over_exterior(p, BK7)?);
+                unit_reflectance(p)?;
+                match p.colour("specular_transmittance", SpectrumUse::Reflectance)? {
+                    None => {}
+                    Some(super::props::ColourParam::Value(c)) if c == Vec3A::ONE => {}
+                    Some(_) => return Err(p.error("a `specular_transmittance` other than 1 is not supported")),
+                }
+                m.one_sided = false;
+            }
             "null" => {
                 // Scatters nothing; rays pass straight through (`src/bsdfs/null.cpp`).
                 m.null = true;
@@ -120,7 +130,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, null, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, roughdielectric, conductor, roughconductor, plastic, thindielectric, null, twosided and normalmap"
                 )))
             }
         }

@@ -163,9 +163,10 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         },
         sensor::MediaHandling::Ignored => {
             let at = integrator_seen.unwrap_or(&doc.root.origin);
-            if let Some(m) = materials.iter().find(|m| m.null) {
+            if let Some(m) = materials.iter().find(|m| m.null || m.thin_dielectric.is_some()) {
+                let kind = if m.null { "null" } else { "thindielectric" };
                 return Err(at.error(format!(
-                    "the `null` BSDF (`{}`) is rendered only with `volpath` / `volpathmis`: Mitsuba's `path` and `direct` stop emitter sampling at it yet weigh the light seen through it against that sampling",
+                    "the `{kind}` BSDF (`{}`) is rendered only with `volpath` / `volpathmis`: Mitsuba's `path` and `direct` do not sample emitters through its null transmission yet weigh the light seen through it against that sampling",
                     m.name
                 )));
             }
