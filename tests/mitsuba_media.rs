@@ -5,6 +5,8 @@
 //! boundaries), a render against a Mitsuba reference, and determinism
 //! across thread counts.
 
+mod common;
+
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::analysis::converge::read_exr;
 use caustic::integrator::{render, RenderPlan};
@@ -306,4 +308,52 @@ fn shadow_rays_through_a_thin_dielectric_carry_its_transmittance() {
     // emitter sampling that cannot find it: refused.
     let e = load_error("path", r#"<shape type="sphere"><bsdf type="thindielectric"/></shape>"#);
     assert!(e.contains("scene.xml:2:1") && e.contains("thindielectric"), "{e}");
+}
+
+/// The command line: a refused medium exits with code 2 and its place; a
+/// media scene refuses the Whitted integrator, which cannot render it.
+#[test]
+fn the_command_line_refuses_what_it_cannot_render_with_code_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let bad = write(
+        dir.path(),
+        &scene_text(
+            "volpath",
+            r#"<shape type="sphere"><medium type="heterogeneous" name="interior"/></shape>"#,
+        ),
+    );
+    let o = common::cli::caustic(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::cli::describe(&o));
+    assert!(
+        common::cli::stderr(&o).contains("scene.xml:4:22"),
+        "{}",
+        common::cli::describe(&o)
+    );
+    let media = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/media.xml");
+    let o = common::cli::caustic(&[
+        "render",
+        media.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--integrator",
+        "whitted",
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::cli::describe(&o));
+    assert!(
+        common::cli::stderr(&o).contains("only the path integrator renders"),
+        "{}",
+        common::cli::describe(&o)
+    );
+    let o = common::cli::caustic(&[
+        "render",
+        media.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::cli::describe(&o));
 }

@@ -84,6 +84,8 @@ impl Overrides {
     /// Applies the overrides to `scene` (loaded from `source`), refusing
     /// values beyond the limits with the file named in the message.
     pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+        // Media and null surfaces are the path integrator's alone.
+        let volumetric = integrator::volpath::needs_volumetric(scene);
         let s = &mut scene.settings;
         s.width = self.width.unwrap_or(s.width);
         s.height = self.height.unwrap_or(s.height);
@@ -110,6 +112,13 @@ impl Overrides {
             s.triangle_test = t;
         }
         if let Some(i) = self.integrator {
+            if volumetric && i == IntegratorKind::Whitted {
+                return Err(JobError::Invalid(format!(
+                    "{}: --integrator whitted: the scene has participating media or null / thin-dielectric \
+                     surfaces, which only the path integrator renders",
+                    source.display()
+                )));
+            }
             s.integrator = i;
         }
         if let Some(k) = self.sampler {
