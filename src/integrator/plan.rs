@@ -382,7 +382,7 @@ impl RenderPlan {
                 g: v.g,
             },
             Some(None) if path => MediumPlan::NoCoefficients,
-            _ if path && super::volpath::needs_volumetric(scene) => MediumPlan::Bounded {
+            _ if path && scene.is_volumetric() => MediumPlan::Bounded {
                 media: scene.media.list.len(),
                 null_objects: scene
                     .objects

@@ -572,7 +572,7 @@ fn tracer<'a>(
             }
             Tracer::Whitted(w)
         }
-        IntegratorKind::Path if super::volpath::needs_volumetric(scene) => {
+        IntegratorKind::Path if scene.is_volumetric() => {
             Tracer::Volume(Box::new(super::volpath::VolumePathTracer::new(scene, accel, plan)))
         }
         IntegratorKind::Path => {

@@ -52,12 +52,6 @@ const MAX_SHADOW_CROSSINGS: u32 = 256;
 /// crosses before the path ends (the same kind of bound).
 const MAX_NULL_CROSSINGS: u32 = 1024;
 
-/// True when `scene` needs the volumetric path tracer: it has media or
-/// null surfaces.
-pub fn needs_volumetric(scene: &Scene) -> bool {
-    !scene.media.is_empty() || scene.materials.iter().any(|m| m.null || m.thin_dielectric.is_some())
-}
-
 /// The volumetric path tracer over one scene and accelerator.
 pub struct VolumePathTracer<'a> {
     scene: &'a Scene,

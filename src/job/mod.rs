@@ -85,7 +85,7 @@ impl Overrides {
     /// values beyond the limits with the file named in the message.
     pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
         // Media and null surfaces are the path integrator's alone.
-        let volumetric = integrator::volpath::needs_volumetric(scene);
+        let volumetric = scene.is_volumetric();
         let s = &mut scene.settings;
         s.width = self.width.unwrap_or(s.width);
         s.height = self.height.unwrap_or(s.height);

@@ -366,6 +366,13 @@ impl Scene {
         }
     }
 
+    /// True when the scene needs volumetric path tracing
+    /// (`integrator::volpath`): it has media, or surfaces rays pass
+    /// straight through (`null`, thin dielectrics).
+    pub fn is_volumetric(&self) -> bool {
+        !self.media.is_empty() || self.materials.iter().any(|m| m.null || m.thin_dielectric.is_some())
+    }
+
     /// Bounds of the whole scene.
     pub fn bounds(&self) -> Aabb {
         (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(self.object_bounds(i)))
