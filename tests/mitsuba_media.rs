@@ -311,7 +311,8 @@ fn shadow_rays_through_a_thin_dielectric_carry_its_transmittance() {
 }
 
 /// The command line: a refused medium exits with code 2 and its place; a
-/// media scene refuses the Whitted integrator, which cannot render it.
+/// media scene refuses the Whitted integrator and photon-mapped caustics,
+/// which the volumetric path tracer does not use.
 #[test]
 fn the_command_line_refuses_what_it_cannot_render_with_code_2() {
     let dir = tempfile::tempdir().unwrap();
@@ -343,6 +344,21 @@ fn the_command_line_refuses_what_it_cannot_render_with_code_2() {
     assert_eq!(o.status.code(), Some(2), "{}", common::cli::describe(&o));
     assert!(
         common::cli::stderr(&o).contains("only the path integrator renders"),
+        "{}",
+        common::cli::describe(&o)
+    );
+    let o = common::cli::caustic(&[
+        "render",
+        media.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--caustics",
+        "map",
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::cli::describe(&o));
+    assert!(
+        common::cli::stderr(&o).contains("traces caustics as paths"),
         "{}",
         common::cli::describe(&o)
     );

@@ -151,6 +151,13 @@ impl Overrides {
             s.denoise_quality = q;
         }
         if let Some(c) = self.caustics {
+            if volumetric && c == crate::scene::CausticsMode::Map {
+                return Err(JobError::Invalid(format!(
+                    "{}: --caustics map: the volumetric path tracer (media, null or thin-dielectric \
+                     surfaces) traces caustics as paths",
+                    source.display()
+                )));
+            }
             s.photons.caustics = c;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)
