@@ -84,8 +84,9 @@ impl<'a> VolumePathTracer<'a> {
     }
 
     /// Transmittance from `origin`, in `medium`, to the light: the product
-    /// of the media's transmittances over the segments, zero when any
-    /// surface other than a null one is in the way.
+    /// of the media's transmittances over the segments and of the thin
+    /// sheets' `1 − R'`; zero when any other surface than a null one or a
+    /// thin sheet is in the way.
     fn transmittance(
         &self,
         origin: Vec3A,
