@@ -509,6 +509,32 @@ mod tests {
     }
 
     #[test]
+    fn fingerprint_sees_media_and_pass_through_surfaces() {
+        let base = fingerprint(&scene(), AccelKind::KdTree, "");
+        let mut s = scene();
+        s.materials[0].null = true;
+        let null = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, null);
+        s.materials[0].null = false;
+        s.materials[0].thin_dielectric = Some(1.5);
+        let thin = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, thin);
+        assert_ne!(null, thin);
+        let mut s = scene();
+        s.media.list.push(crate::scene::HomogeneousMedium {
+            name: "fog".into(),
+            sigma_t: crate::math::Vec3A::splat(0.1),
+            albedo: crate::math::Vec3A::splat(0.9),
+            phase: crate::scene::PhaseFunction::Isotropic,
+        });
+        s.media.camera = Some(0);
+        let fog = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, fog);
+        s.media.list[0].albedo.y = 0.8;
+        assert_ne!(fog, fingerprint(&s, AccelKind::KdTree, ""));
+    }
+
+    #[test]
     fn fingerprint_sees_what_changes_samples_only() {
         let base = fingerprint(&scene(), AccelKind::KdTree, "");
         assert_eq!(base.len(), 64);
