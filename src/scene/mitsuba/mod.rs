@@ -5,7 +5,8 @@
 //! through typed getters and refuses any it did not read, and one module per
 //! plugin class maps each plugin to the scene model: [`sensor`] (camera,
 //! film, sampler, integrator), [`shapes`], [`bsdfs`], [`emitters`],
-//! [`textures`]. A plugin either maps exactly (the same image in
+//! [`textures`], [`media`] (homogeneous media and their phase functions,
+//! which `volpath` renders and `path` ignores). A plugin either maps exactly (the same image in
 //! expectation) or is refused with its file:line:column; wrappers that only
 //! add outputs (`moment`, `aov`) are rendered through with a warning.
 //! Spectra become RGB as Mitsuba's RGB variants make them ([`spectrum`]).
