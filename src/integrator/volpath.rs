@@ -60,6 +60,8 @@ pub struct VolumePathTracer<'a> {
     max_depth: u32,
     /// The scene's media, ready for sampling (same indices).
     media: Vec<Homogeneous>,
+    /// Per medium: its scattering vertices sample a light.
+    sample_emitters: Vec<bool>,
 }
 
 /// Where a shadow ray goes.
@@ -80,6 +82,7 @@ impl<'a> VolumePathTracer<'a> {
             lights: LightSampler::new(scene),
             max_depth: plan.max_depth,
             media: scene.media.list.iter().map(Homogeneous::of_medium).collect(),
+            sample_emitters: scene.media.list.iter().map(|m| m.sample_emitters).collect(),
         }
     }
 
@@ -178,8 +181,12 @@ impl<'a> VolumePathTracer<'a> {
                         }
                         let x = ray.origin + dir * t;
                         let wo = -dir;
-                        // Next-event estimation through the phase function.
-                        if let Some(ls) = self.lights.sample(x, rng.f32(), rng.vec2()) {
+                        // Next-event estimation through the phase function
+                        // (not in a medium with `sample_emitters` = false:
+                        // light the phase-sampled direction reaches then
+                        // counts in full, as after a delta bounce).
+                        let nee = self.sample_emitters[m as usize];
+                        if let Some(ls) = nee.then(|| self.lights.sample(x, rng.f32(), rng.vec2())).flatten() {
                             let f = h.phase(wo, ls.wi);
                             if f > 0.0 {
                                 let target = match ls.target {
@@ -194,7 +201,7 @@ impl<'a> VolumePathTracer<'a> {
                             }
                         }
                         let (wi, pdf) = h.sample_phase(wo, rng.vec2());
-                        specular = false;
+                        specular = !nee;
                         scatter_pdf = pdf;
                         scatter_point = x;
                         null_crossings = 0;

@@ -526,6 +526,7 @@ mod tests {
             sigma_t: crate::math::Vec3A::splat(0.1),
             albedo: crate::math::Vec3A::splat(0.9),
             phase: crate::scene::PhaseFunction::Isotropic,
+            sample_emitters: true,
         });
         s.media.camera = Some(0);
         let fog = fingerprint(&s, AccelKind::KdTree, "");

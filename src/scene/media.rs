@@ -47,6 +47,10 @@ pub struct HomogeneousMedium {
     pub albedo: Vec3A,
     /// The phase function.
     pub phase: PhaseFunction,
+    /// Scattering vertices in this medium sample a light (next-event
+    /// estimation); when false (Mitsuba's `sample_emitters` = false) light
+    /// is found only by the phase-sampled direction, with full weight.
+    pub sample_emitters: bool,
 }
 
 impl HomogeneousMedium {

@@ -56,11 +56,7 @@ impl Builder<'_> {
             return Err(p.error(format!("`albedo` = {albedo} must be in [0, 1]")));
         }
         let scale = p.float_checked("scale", 1.0, "≥ 0", |s| s >= 0.0 && s.is_finite())?;
-        if !p.boolean("sample_emitters")?.unwrap_or(true) {
-            return Err(p.error(
-                "`sample_emitters` = false is not supported (caustic always samples emitters from medium vertices)",
-            ));
-        }
+        let sample_emitters = p.boolean("sample_emitters")?.unwrap_or(true);
         // Mitsuba's hint that the extinction varies over the spectrum: the
         // same medium either way, sampled by caustic's spectral MIS.
         p.boolean("has_spectral_extinction")?;
@@ -74,6 +70,7 @@ impl Builder<'_> {
             sigma_t: sigma_t * scale,
             albedo,
             phase,
+            sample_emitters,
         })
     }
 
