@@ -162,6 +162,9 @@ pub enum MediumPlan {
         null_objects: usize,
         /// The camera starts in a medium.
         camera_inside: bool,
+        /// `volpath`'s null surfaces (passed without a bounce), or Mitsuba
+        /// `path`'s (delta bounces that block shadow rays).
+        volumetric: bool,
     },
     /// No `[medium]`, or the Whitted integrator (its exponential fog).
     None,
@@ -393,6 +396,7 @@ impl RenderPlan {
                     })
                     .count(),
                 camera_inside: scene.media.camera.is_some(),
+                volumetric: scene.media.pass_through == crate::scene::PassThrough::Volumetric,
             },
             _ => MediumPlan::None,
         };
@@ -705,9 +709,21 @@ impl RenderPlan {
                 "[medium] gives no `absorption` and `scattering` (the fog is the Whitted integrator's)",
             )),
             MediumPlan::Bounded {
+                null_objects,
+                volumetric: false,
+                ..
+            } => stages.push(Stage::ran(
+                "media",
+                format!(
+                    "none (Mitsuba's `path` ignores them); {null_objects} null or thin-dielectric object(s) as \
+                     `path` meets them: delta bounces that block shadow rays"
+                ),
+            )),
+            MediumPlan::Bounded {
                 media,
                 null_objects,
                 camera_inside,
+                ..
             } => stages.push(Stage::ran(
                 "media",
                 format!(

@@ -30,6 +30,12 @@
 //!   (`max_depth` segments: a vertex at depth `max_depth − 1` scatters no
 //!   further).
 //!
+//! With Mitsuba's `path` or `direct` reading the scene
+//! ([`PassThrough::SurfaceBounce`]: no media) a null surface or a thin
+//! sheet's transmission is instead a delta bounce like a mirror's (Mitsuba's
+//! `BSDFFlags::Delta` includes `Null`): it counts toward `max_depth`, and
+//! shadow rays stop at it.
+//!
 //! Every random number comes from the pixel sample's own stream, in an
 //! order fixed by the path alone.
 
@@ -42,7 +48,7 @@ use crate::accel::Accel;
 use crate::bsdf::thin::ThinDielectric;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec3A};
-use crate::scene::Scene;
+use crate::scene::{PassThrough, Scene};
 
 /// Most surfaces a shadow ray passes through before it is taken as
 /// blocked: a bound on the work, far above any real scene's nesting.
@@ -62,6 +68,10 @@ pub struct VolumePathTracer<'a> {
     media: Vec<Homogeneous>,
     /// Per medium: its scattering vertices sample a light.
     sample_emitters: Vec<bool>,
+    /// Null surfaces and thin sheets' transmission pass paths and shadow
+    /// rays without a bounce (`volpath`), or are delta bounces that block
+    /// shadow rays (Mitsuba's `path`).
+    volumetric: bool,
 }
 
 /// Where a shadow ray goes.
@@ -83,6 +93,7 @@ impl<'a> VolumePathTracer<'a> {
             max_depth: plan.max_depth,
             media: scene.media.list.iter().map(Homogeneous::of_medium).collect(),
             sample_emitters: scene.media.list.iter().map(|m| m.sample_emitters).collect(),
+            volumetric: scene.media.pass_through == PassThrough::Volumetric,
         }
     }
 
@@ -122,6 +133,10 @@ impl<'a> VolumePathTracer<'a> {
             }
             let si = self.scene.surface_interaction(&ray, &hit);
             let material = &self.scene.materials[si.material as usize];
+            if !self.volumetric {
+                // Mitsuba's `path`: every surface blocks shadow rays.
+                return Vec3A::ZERO;
+            }
             if let Some(eta) = material.thin_dielectric {
                 // What a thin sheet lets straight through (Mitsuba's
                 // `eval_null_transmission`), at the shading normal's cosine.
@@ -256,7 +271,7 @@ impl<'a> VolumePathTracer<'a> {
                 }
             }
             let interface = self.scene.media.interface(si.object);
-            if material.null {
+            if material.null && self.volumetric {
                 // Straight on, in the medium on the far side; not a bounce.
                 null_crossings += 1;
                 if null_crossings > MAX_NULL_CROSSINGS {
@@ -271,7 +286,7 @@ impl<'a> VolumePathTracer<'a> {
             }
             // A thin sheet is sampled at any depth: going straight through
             // it is a null event, not a bounce.
-            let sheet = material.thin_dielectric.is_some();
+            let sheet = material.thin_dielectric.is_some() && self.volumetric;
             if depth >= self.max_depth && !sheet {
                 break;
             }

@@ -175,7 +175,7 @@ fn fingerprint_of(
             );
         }
     }
-    if !scene.media.is_empty() {
+    if scene.media != crate::scene::Media::default() {
         field("media", format!("{:?}", scene.media).as_bytes());
     }
     for mesh in &scene.meshes {
@@ -528,6 +528,10 @@ mod tests {
             phase: crate::scene::PhaseFunction::Isotropic,
             sample_emitters: true,
         });
+        // How null surfaces are crossed (a `path` scene has no medium).
+        let mut p = scene();
+        p.media.pass_through = crate::scene::PassThrough::SurfaceBounce;
+        assert_ne!(base, fingerprint(&p, AccelKind::KdTree, ""));
         s.media.camera = Some(0);
         let fog = fingerprint(&s, AccelKind::KdTree, "");
         assert_ne!(base, fog);

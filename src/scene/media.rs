@@ -88,6 +88,22 @@ impl MediumInterface {
     }
 }
 
+/// How paths treat media and the surfaces rays pass straight through
+/// (`null`, a thin dielectric's transmission): as the Mitsuba integrator
+/// that reads the scene does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PassThrough {
+    /// Mitsuba's `volpath`: media scatter and absorb; crossing a null
+    /// surface is not a bounce, and shadow rays pass through it.
+    #[default]
+    Volumetric,
+    /// Mitsuba's `path` and `direct`: no media; crossing a null surface is
+    /// a delta bounce (Mitsuba's `BSDFFlags::Delta` includes `Null`): it
+    /// counts toward `max_depth`, samples no light, and blocks shadow rays,
+    /// so light behind it arrives only along the continued path.
+    SurfaceBounce,
+}
+
 /// The scene's media, which objects bound them, and the camera's.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Media {
@@ -98,6 +114,8 @@ pub struct Media {
     pub interfaces: Vec<MediumInterface>,
     /// The medium the camera's rays start in.
     pub camera: Option<u32>,
+    /// How paths cross null surfaces (and whether media count).
+    pub pass_through: PassThrough,
 }
 
 impl Media {

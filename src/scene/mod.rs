@@ -31,7 +31,7 @@ pub use material::{
     AlphaMask, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution,
     Mirror, NormalMap, ShadingModel,
 };
-pub use media::{HomogeneousMedium, Media, MediumInterface, PhaseFunction};
+pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
 pub use medium::Medium;
 
 /// Loads a scene file, choosing the format by extension: `.xml` is a
@@ -366,9 +366,10 @@ impl Scene {
         }
     }
 
-    /// True when the scene needs volumetric path tracing
-    /// (`integrator::volpath`): it has media, or surfaces rays pass
-    /// straight through (`null`, thin dielectrics).
+    /// True when the scene needs `integrator::volpath`: it has media, or
+    /// surfaces rays pass straight through (`null`, thin dielectrics), which
+    /// that integrator treats as the Mitsuba integrator reading the scene
+    /// does ([`Media::pass_through`]).
     pub fn is_volumetric(&self) -> bool {
         !self.media.is_empty() || self.materials.iter().any(|m| m.null || m.thin_dielectric.is_some())
     }

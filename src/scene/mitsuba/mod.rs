@@ -161,16 +161,10 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
             interfaces: if media.is_empty() { Vec::new() } else { interfaces },
             list: media,
             camera: camera_medium,
+            pass_through: crate::scene::PassThrough::Volumetric,
         },
         sensor::MediaHandling::Ignored => {
             let at = integrator_seen.unwrap_or(&doc.root.origin);
-            if let Some(m) = materials.iter().find(|m| m.null || m.thin_dielectric.is_some()) {
-                let kind = if m.null { "null" } else { "thindielectric" };
-                return Err(at.error(format!(
-                    "the `{kind}` BSDF (`{}`) is rendered only with `volpath` / `volpathmis`: Mitsuba's `path` and `direct` do not sample emitters through its null transmission yet weigh the light seen through it against that sampling",
-                    m.name
-                )));
-            }
             if !media.is_empty() {
                 warnings.push(format!(
                     "{}:{}: the integrator ignores participating media (as Mitsuba's `path` and `direct` do); `volpath` renders them",
@@ -178,7 +172,11 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                     at.place
                 ));
             }
-            crate::scene::Media::default()
+            // Null surfaces (and thin sheets) as Mitsuba's `path` meets them.
+            crate::scene::Media {
+                pass_through: crate::scene::PassThrough::SurfaceBounce,
+                ..Default::default()
+            }
         }
     };
     for o in &mut objects {
