@@ -251,7 +251,8 @@ pub enum MediaHandling {
     /// `volpath`, `volpathmis`: media scatter and absorb, shadow rays pass
     /// through null surfaces.
     Rendered,
-    /// `path`, `direct`: Mitsuba ignores the media (rays travel as in vacuum).
+    /// `path`, `direct`: Mitsuba ignores the media (rays travel as in
+    /// vacuum), and a null surface is a delta bounce that blocks shadow rays.
     Ignored,
 }
 
