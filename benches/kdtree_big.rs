@@ -55,6 +55,7 @@ fn bumpy_sphere(n: u32) -> Mesh {
 
 fn scene_of(mesh: Mesh) -> Scene {
     Scene {
+        media: Default::default(),
         settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 0.0, 4.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("white", Vec3A::ONE)],

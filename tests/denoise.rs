@@ -32,6 +32,7 @@ fn wall_scene(integrator: IntegratorKind) -> Scene {
         ..Material::diffuse("mirror", Vec3A::ZERO)
     };
     Scene {
+        media: Default::default(),
         settings: RenderSettings {
             width: 48,
             height: 32,

@@ -185,6 +185,7 @@ fn scene_with(mesh: Mesh) -> Scene {
         ),
     ];
     Scene {
+        media: Default::default(),
         settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 0.0, 8.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("white", Vec3A::ONE)],

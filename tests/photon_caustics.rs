@@ -39,6 +39,7 @@ fn mirror_scene(reflectivity: f32, count: u64) -> Scene {
     };
     settings.photons.count = count;
     Scene {
+        media: Default::default(),
         settings,
         camera: Camera::new(Vec3A::new(0.0, 2.0, 8.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
         materials: vec![Material::diffuse("floor", Vec3A::splat(0.5)), mirror],
@@ -109,6 +110,7 @@ fn glass_scene(count: u64) -> Scene {
     settings.photons.k = 32;
     settings.photons.max_radius = Some(0.25);
     Scene {
+        media: Default::default(),
         settings,
         camera: Camera::new(Vec3A::new(-1.0, 3.0, 3.0), Vec3A::new(-0.3, 0.0, 0.0), Vec3A::Y, 50.0).unwrap(),
         materials: vec![Material::diffuse("floor", Vec3A::splat(0.8)), glass],

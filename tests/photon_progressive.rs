@@ -60,6 +60,7 @@ fn glass_scene(spp: u32, count: u64, seed: u64) -> Scene {
         material: 0,
     };
     Scene {
+        media: Default::default(),
         settings,
         camera: Camera::new(Vec3A::new(-0.2, 3.0, 2.0), Vec3A::new(-0.5, 0.0, 0.0), Vec3A::Y, 40.0).unwrap(),
         materials: vec![Material::diffuse("floor", Vec3A::splat(0.8)), glass],

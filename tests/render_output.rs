@@ -9,6 +9,7 @@ use caustic::scene::{Camera, Light, Material, Object, Quad, RenderSettings, Scen
 
 fn small_scene() -> Scene {
     Scene {
+        media: Default::default(),
         settings: RenderSettings {
             width: 37,
             height: 21,

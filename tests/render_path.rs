@@ -9,6 +9,7 @@ use caustic::scene::{Camera, IntegratorKind, Light, Material, Object, RenderSett
 
 fn furnace(albedo: f32, radiance: f32) -> Scene {
     Scene {
+        media: Default::default(),
         settings: RenderSettings {
             width: 24,
             height: 24,

@@ -82,6 +82,7 @@ fn albedo() -> Vec3A {
 
 fn lit_floor_scene(spp: u32) -> Scene {
     Scene {
+        media: Default::default(),
         settings: settings(65, 65, spp),
         camera: camera([0.0, 3.0, 3.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 40.0),
         materials: vec![Material::diffuse("floor", albedo())],
@@ -146,6 +147,7 @@ fn a_mirror_shows_the_reflected_objects_colour() {
         ..Material::diffuse("mirror", Vec3A::splat(0.5))
     };
     let mut scene = Scene {
+        media: Default::default(),
         settings: settings(33, 33, 1),
         camera: camera([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 30.0),
         materials: vec![red, mirror],
@@ -182,6 +184,7 @@ fn glass() -> Material {
 fn a_glass_sphere_refracts_and_is_not_black_at_its_centre() {
     let light = Vec3A::new(0.0, 2.5, -4.5);
     let mut scene = Scene {
+        media: Default::default(),
         settings: settings(33, 33, 4),
         camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
         materials: vec![Material::diffuse("wall", Vec3A::splat(0.8)), glass()],
@@ -225,6 +228,7 @@ fn a_glass_ball_lens_inverts_the_wall_behind_it() {
     // centre one sees red. An inverted IOR ratio would make it diverge and
     // show green there.
     let scene = Scene {
+        media: Default::default(),
         settings: settings(33, 33, 4),
         camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
         materials: vec![
@@ -267,6 +271,7 @@ fn area_light_scene(with_occluder: bool, samples: u32, spp: u32) -> Scene {
         objects.push(sphere([0.0, 1.0, 0.0], 0.5, 0));
     }
     Scene {
+        media: Default::default(),
         settings: settings(64, 48, spp),
         camera: camera([1.0, 2.0, 5.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 45.0),
         materials: vec![Material::diffuse("floor", albedo())],
@@ -433,6 +438,7 @@ fn scaled_scene(s: f32) -> Scene {
     let mut settings = settings(48, 48, 1);
     settings.photons.count = 0;
     Scene {
+        media: Default::default(),
         settings,
         camera: camera([0.0, 3.0 * s, 3.0 * s], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0),
         materials: vec![Material::diffuse("floor", albedo()), mirror],

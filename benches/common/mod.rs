@@ -28,6 +28,7 @@ pub fn quick(seconds: u64) -> Criterion {
 pub fn torus_scene() -> Scene {
     let torus = generate::torus(1.0, 0.35, 512, 128);
     Scene {
+        media: Default::default(),
         settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 1.6, 4.3), Vec3A::new(0.0, 0.5, 0.0), Vec3A::Y, 40.0)
             .expect("valid camera"),

@@ -20,6 +20,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
 pub mod microfacet;
+pub mod null;
 pub mod phong;
 pub mod plastic;
 pub mod rough_plastic;
@@ -33,6 +34,7 @@ use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
 use dielectric::{RoughDielectric, SmoothDielectric, ThinDielectric};
 use microfacet::{Microfacet, SMOOTH_ALPHA};
+use null::Null;
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
 use rough_plastic::RoughPlastic;
@@ -106,8 +108,8 @@ enum Lobe<'a> {
     RoughConductor(RoughConductor),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
-    /// A hole: light continues straight through, unchanged.
-    PassThrough,
+    /// Mitsuba's `null`, or a blend's hole: light continues straight through, unchanged.
+    Null(Null),
 }
 
 impl Lobe<'_> {
@@ -123,7 +125,7 @@ impl Lobe<'_> {
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
             | Lobe::SmoothConductor(_)
-            | Lobe::PassThrough => Vec3A::ZERO,
+            | Lobe::Null(_) => Vec3A::ZERO,
         }
     }
 
@@ -139,7 +141,7 @@ impl Lobe<'_> {
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
             | Lobe::SmoothConductor(_)
-            | Lobe::PassThrough => 0.0,
+            | Lobe::Null(_) => 0.0,
         }
     }
 
@@ -155,11 +157,7 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
             Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
-            Lobe::PassThrough => {
-                let mut s = BsdfSample::specular(-wo, Vec3A::splat(1.0 / wo.z.abs()), 1.0);
-                s.transmission = true;
-                (wo.z != 0.0).then_some(s)
-            }
+            Lobe::Null(n) => n.sample(wo),
         }
     }
 
@@ -170,7 +168,7 @@ impl Lobe<'_> {
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
             | Lobe::SmoothConductor(_)
-            | Lobe::PassThrough => 1.0,
+            | Lobe::Null(_) => 1.0,
             Lobe::Plastic(p) => p.delta_probability(wo),
             _ => 0.0,
         }
@@ -184,7 +182,7 @@ impl Lobe<'_> {
                 | Lobe::SmoothDielectric(_)
                 | Lobe::ThinDielectric(_)
                 | Lobe::SmoothConductor(_)
-                | Lobe::PassThrough
+                | Lobe::Null(_)
         )
     }
 }
@@ -232,7 +230,10 @@ impl<'a> Bsdf<'a> {
             two_sided: !m.one_sided,
             transport,
         };
-        if let Some(d) = m.dielectric {
+        if m.null {
+            b.two_sided = false;
+            b.push(Lobe::Null(Null), 1.0);
+        } else if let Some(d) = m.dielectric {
             b.two_sided = false;
             let tint = d.tint;
             let lobe = match rough_or_smooth(d.roughness, m.roughness_v, m.microfacet) {
@@ -305,12 +306,12 @@ impl<'a> Bsdf<'a> {
     /// bend the ray (Mitsuba's `null`).
     pub fn pass_through(transport: Transport) -> Self {
         let mut b = Self {
-            lobes: [(Lobe::PassThrough, 0.0); MAX_LOBES],
+            lobes: [(Lobe::Null(Null), 0.0); MAX_LOBES],
             count: 0,
             two_sided: false,
             transport,
         };
-        b.push(Lobe::PassThrough, 1.0);
+        b.push(Lobe::Null(Null), 1.0);
         b
     }
 
@@ -378,7 +379,12 @@ impl<'a> Bsdf<'a> {
     pub fn has_delta_lobe(&self) -> bool {
         self.lobes()
             .iter()
-            .any(|(l, _)| (l.is_smooth_only() && !matches!(l, Lobe::PassThrough)) || matches!(l, Lobe::Plastic(_)))
+            .any(|(l, _)| (l.is_smooth_only() && !matches!(l, Lobe::Null(_))) || matches!(l, Lobe::Plastic(_)))
+    }
+
+    /// Mitsuba's `null` BSDF (or a blend's hole): rays pass straight through, nothing scatters.
+    pub fn is_null(&self) -> bool {
+        matches!(self.lobes(), [(Lobe::Null(_), _)])
     }
 
     /// True when [`sample`](Self::sample) with the same `wo` and `uc` picks

@@ -42,6 +42,9 @@ enum Step {
 }
 
 fn step(m: &Material) -> Step {
+    if m.null {
+        return Step::Refract(Vec3A::ONE, 1.0);
+    }
     if let Some(b) = m.blend.as_deref() {
         // The side that weighs more (the guides draw no random number);
         // a hole lets the guide ray through, unchanged.

@@ -11,7 +11,7 @@
 
 use crate::math::{Aabb, Frame, Ray, Vec2, Vec3A};
 use crate::scene::medium::VolumeCoefficients;
-use crate::scene::{Medium, Scene};
+use crate::scene::{HomogeneousMedium, Medium, Scene};
 use std::f32::consts::PI;
 
 /// The medium's coefficients, ready for sampling.
@@ -51,6 +51,16 @@ impl Homogeneous {
             sigma_s: c.scattering,
             sigma_t: c.absorption + c.scattering,
             g: c.g,
+        }
+    }
+
+    /// From a scene medium (Mitsuba's homogeneous medium: `σs = albedo σt`;
+    /// the isotropic phase function is Henyey–Greenstein with `g = 0`).
+    pub fn of_medium(m: &HomogeneousMedium) -> Self {
+        Self {
+            sigma_s: m.sigma_s(),
+            sigma_t: m.sigma_t,
+            g: m.phase.asymmetry(),
         }
     }
 

@@ -12,6 +12,7 @@ pub mod path;
 pub mod photon;
 pub mod plan;
 pub mod render;
+pub mod volpath;
 pub mod whitted;
 
 pub use plan::RenderPlan;

@@ -152,6 +152,20 @@ pub enum MediumPlan {
         /// Henyey–Greenstein asymmetry.
         g: f32,
     },
+    /// Media bounded by objects, or null surfaces (Mitsuba's `volpath`):
+    /// the volumetric path tracer (`integrator::volpath`).
+    Bounded {
+        /// Homogeneous media.
+        media: usize,
+        /// Objects whose material is `null` or a thin dielectric (rays pass
+        /// straight through them).
+        null_objects: usize,
+        /// The camera starts in a medium.
+        camera_inside: bool,
+        /// `volpath`'s null surfaces (passed without a bounce), or Mitsuba
+        /// `path`'s (delta bounces that block shadow rays).
+        volumetric: bool,
+    },
     /// No `[medium]`, or the Whitted integrator (its exponential fog).
     None,
     /// A `[medium]` with the fog's keys only.
@@ -371,6 +385,19 @@ impl RenderPlan {
                 g: v.g,
             },
             Some(None) if path => MediumPlan::NoCoefficients,
+            _ if path && scene.is_volumetric() => MediumPlan::Bounded {
+                media: scene.media.list.len(),
+                null_objects: scene
+                    .objects
+                    .iter()
+                    .filter(|o| {
+                        let m = &scene.materials[o.material as usize];
+                        m.null || m.is_thin_sheet()
+                    })
+                    .count(),
+                camera_inside: scene.media.camera.is_some(),
+                volumetric: scene.media.pass_through == crate::scene::PassThrough::Volumetric,
+            },
             _ => MediumPlan::None,
         };
         let fog = match &s.medium {
@@ -681,6 +708,31 @@ impl RenderPlan {
                 "medium",
                 "[medium] gives no `absorption` and `scattering` (the fog is the Whitted integrator's)",
             )),
+            MediumPlan::Bounded {
+                null_objects,
+                volumetric: false,
+                ..
+            } => stages.push(Stage::ran(
+                "media",
+                format!(
+                    "none (Mitsuba's `path` ignores them); {null_objects} null or thin-dielectric object(s) as \
+                     `path` meets them: delta bounces that block shadow rays"
+                ),
+            )),
+            MediumPlan::Bounded {
+                media,
+                null_objects,
+                camera_inside,
+                ..
+            } => stages.push(Stage::ran(
+                "media",
+                format!(
+                    "{media} homogeneous medium(s), {null_objects} null or thin-dielectric object(s), the camera in {}; \
+                     volumetric path tracing: free flights, phase-function and light sampling, shadow rays \
+                     through null and thin-dielectric surfaces",
+                    if camera_inside { "a medium" } else { "vacuum" }
+                ),
+            )),
             MediumPlan::None => {}
         }
         stages.push(match self.fog {
@@ -749,6 +801,7 @@ mod tests {
             material,
         };
         Scene {
+            media: Default::default(),
             settings: RenderSettings {
                 spp,
                 sharing,

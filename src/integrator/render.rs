@@ -572,6 +572,9 @@ fn tracer<'a>(
             }
             Tracer::Whitted(w)
         }
+        IntegratorKind::Path if scene.is_volumetric() => {
+            Tracer::Volume(Box::new(super::volpath::VolumePathTracer::new(scene, accel, plan)))
+        }
         IntegratorKind::Path => {
             let mut p = PathTracer::new(scene, accel, plan);
             match caustics {
@@ -711,6 +714,8 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
 enum Tracer<'a> {
     Whitted(Whitted<'a>),
     Path(Box<PathTracer<'a>>),
+    /// Media bounded by surfaces, or null surfaces (Mitsuba's `volpath`).
+    Volume(Box<super::volpath::VolumePathTracer<'a>>),
 }
 
 /// The camera rays of a render's pixel samples: what is shared by every
@@ -875,6 +880,7 @@ fn render_tile_pass(
                         whitted.radiance(&ray, 0, &mut ctx)
                     }
                     Tracer::Path(path) => path.radiance(&ray, &mut rng, &mut out.rays),
+                    Tracer::Volume(path) => path.radiance(&ray, &mut rng, &mut out.rays),
                 };
                 out.samples += 1;
                 if l.is_finite() {

@@ -262,11 +262,12 @@ impl<'a> Whitted<'a> {
         } else {
             Vec3A::ZERO
         };
-        if m.blend.is_none() {
+        if m.blend.is_none() && !m.null {
             return emitted + self.scatter(ray, &si, m, depth, ctx);
         }
-        // A blend scatters as one of its sides; a hole lets the ray through.
-        match m.resolve(si.uv, || ctx.rng.f32()) {
+        // A blend scatters as one of its sides; a hole or a null surface
+        // lets the ray through.
+        match m.resolve(si.uv, || ctx.rng.f32()).filter(|side| !side.null) {
             Some(side) => emitted + self.scatter(ray, &si, &side, depth, ctx),
             None if self.can_bounce(depth) => emitted + self.trace_secondary(&si, ray.dir, depth, ctx),
             None => emitted,

@@ -176,6 +176,16 @@ fn fingerprint_of(
         }
     }
     field("objects", encoding::objects(&scene.objects).as_bytes());
+    // Null surfaces and media, only where there are some (the fingerprint
+    // of a scene in vacuum is the one before media existed).
+    for (i, m) in scene.materials.iter().enumerate() {
+        if m.null {
+            field("material null", format!("material {i}").as_bytes());
+        }
+    }
+    if scene.media != crate::scene::Media::default() {
+        field("media", format!("{:?}", scene.media).as_bytes());
+    }
     for mesh in &scene.meshes {
         // Geometry only: moving or renaming the mesh file does not matter.
         let floats = mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.to_array());
@@ -646,6 +656,40 @@ mod tests {
     fn scene() -> Scene {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/shadow.toml");
         crate::scene::load_scene(&path).unwrap()
+    }
+
+    #[test]
+    fn fingerprint_sees_media_and_pass_through_surfaces() {
+        let base = fingerprint(&scene(), AccelKind::KdTree, "");
+        let mut s = scene();
+        s.materials[0].null = true;
+        let null = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, null);
+        s.materials[0].null = false;
+        s.materials[0].dielectric = Some(crate::scene::Dielectric {
+            thin: true,
+            ..crate::scene::Dielectric::smooth(1.5, crate::math::Vec3A::ONE)
+        });
+        let thin = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, thin);
+        assert_ne!(null, thin);
+        let mut s = scene();
+        s.media.list.push(crate::scene::HomogeneousMedium {
+            name: "fog".into(),
+            sigma_t: crate::math::Vec3A::splat(0.1),
+            albedo: crate::math::Vec3A::splat(0.9),
+            phase: crate::scene::PhaseFunction::Isotropic,
+            sample_emitters: true,
+        });
+        // How null surfaces are crossed (a `volpath` scene may have no medium).
+        let mut p = scene();
+        p.media.pass_through = crate::scene::PassThrough::Volumetric;
+        assert_ne!(base, fingerprint(&p, AccelKind::KdTree, ""));
+        s.media.camera = Some(0);
+        let fog = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, fog);
+        s.media.list[0].albedo.y = 0.8;
+        assert_ne!(fog, fingerprint(&s, AccelKind::KdTree, ""));
     }
 
     #[test]

@@ -84,6 +84,8 @@ impl Overrides {
     /// Applies the overrides to `scene` (loaded from `source`), refusing
     /// values beyond the limits with the file named in the message.
     pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+        // Media and null surfaces are the path integrator's alone.
+        let volumetric = scene.is_volumetric();
         let s = &mut scene.settings;
         s.width = self.width.unwrap_or(s.width);
         s.height = self.height.unwrap_or(s.height);
@@ -110,6 +112,13 @@ impl Overrides {
             s.triangle_test = t;
         }
         if let Some(i) = self.integrator {
+            if volumetric && i == IntegratorKind::Whitted {
+                return Err(JobError::Invalid(format!(
+                    "{}: --integrator whitted: the scene has participating media or null / thin-dielectric \
+                     surfaces, which only the path integrator renders",
+                    source.display()
+                )));
+            }
             s.integrator = i;
         }
         if let Some(k) = self.sampler {
@@ -142,6 +151,13 @@ impl Overrides {
             s.denoise_quality = q;
         }
         if let Some(c) = self.caustics {
+            if volumetric && c == crate::scene::CausticsMode::Map {
+                return Err(JobError::Invalid(format!(
+                    "{}: --caustics map: the volumetric path tracer (media, null or thin-dielectric \
+                     surfaces) traces caustics as paths",
+                    source.display()
+                )));
+            }
             s.photons.caustics = c;
         }
         crate::limits::check_image_limits(s.width, s.height, s.spp)

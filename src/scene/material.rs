@@ -214,6 +214,11 @@ pub struct Material {
     /// one along `∂p/∂u` (Mitsuba's `alpha_v` and `alpha_u`); `None`:
     /// isotropic.
     pub roughness_v: Option<f32>,
+    /// Mitsuba's `null` BSDF: the surface scatters nothing and every ray
+    /// passes straight through it (a delta transmission of weight 1 and
+    /// index ratio 1), the index-matched boundary of a medium. The other
+    /// scattering fields are then unused.
+    pub null: bool,
     /// Textures that replace the constant values above at shading points,
     /// a normal map and an alpha cutout; `None` for an untextured material
     /// (one test on the hot paths).
@@ -379,6 +384,7 @@ impl Material {
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
             roughness_v: None,
+            null: false,
             textures: None,
             blend: None,
         }
@@ -453,6 +459,28 @@ impl Material {
         })
     }
 
+    /// The probability that light passes straight through this surface at
+    /// `uv` without scattering: 1 for a `null` material, the weight of a
+    /// blend's holes (nested blends included), 0 otherwise (Mitsuba's
+    /// `eval_null_transmission` of `null`, `mask` and `blendbsdf`).
+    pub fn hole_probability(&self, uv: Vec2) -> f32 {
+        if self.null {
+            return 1.0;
+        }
+        let Some(b) = self.blend.as_deref() else {
+            return 0.0;
+        };
+        let side = |s: &Option<Material>| s.as_ref().map_or(1.0, |m| m.hole_probability(uv));
+        let w = b.weight_at(uv);
+        (1.0 - w) * side(&b.first) + w * side(&b.second)
+    }
+
+    /// A thin dielectric sheet ([`Dielectric::thin`]).
+    #[inline]
+    pub fn is_thin_sheet(&self) -> bool {
+        self.dielectric.is_some_and(|d| d.thin)
+    }
+
     /// True when surfaces with this material emit light somewhere.
     pub fn emits(&self) -> bool {
         match self.textures.as_deref().and_then(|t| t.emission.as_ref()) {
@@ -512,6 +540,7 @@ impl Material {
             one_sided: self.one_sided,
             microfacet: self.microfacet,
             roughness_v: self.roughness_v.map(|r| scalar(&t.roughness_v, r).max(0.0)),
+            null: self.null,
             textures: None,
             blend: self.blend.clone(),
         }

@@ -10,6 +10,7 @@ pub mod ior;
 pub mod light;
 pub mod load;
 pub mod material;
+pub mod media;
 pub mod medium;
 pub mod metals;
 pub mod mitsuba;
@@ -30,6 +31,7 @@ pub use material::{
     AlphaMask, Blend, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
     MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, ShadingModel, COATING_TABLE_SIZE,
 };
+pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
 pub use medium::Medium;
 
 /// Loads a scene file, choosing the format by extension: `.xml` is a
@@ -331,6 +333,10 @@ pub struct Scene {
     pub meshes: Vec<Arc<Mesh>>,
     /// Objects (the top-level instances).
     pub objects: Vec<Object>,
+    /// Participating media bounded by the objects (Mitsuba's `<medium>`);
+    /// empty: the scene is in vacuum (the TOML water's medium is
+    /// `settings.medium`).
+    pub media: Media,
 }
 
 /// Shading data at a hit, in world space.
@@ -370,6 +376,20 @@ impl Scene {
             Shape::Cylinder(c) => c.bounds(),
             Shape::Mesh { mesh, transform, .. } => transform.bounds(&self.meshes[*mesh as usize].bounds()),
         }
+    }
+
+    /// True when the scene needs `integrator::volpath`: it has media, or
+    /// surfaces rays pass straight through (`null`, thin dielectrics, the
+    /// holes of blends) that shadow rays cross too ([`PassThrough::Volumetric`],
+    /// Mitsuba's `volpath`). Elsewhere such surfaces are delta bounces,
+    /// which every integrator handles.
+    pub fn is_volumetric(&self) -> bool {
+        !self.media.is_empty()
+            || (self.media.pass_through == PassThrough::Volumetric
+                && self
+                    .materials
+                    .iter()
+                    .any(|m| m.null || m.is_thin_sheet() || m.has_holes()))
     }
 
     /// Bounds of the whole scene.

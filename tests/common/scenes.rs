@@ -145,6 +145,7 @@ pub fn test_scene() -> Scene {
         ));
     }
     Scene {
+        media: Default::default(),
         settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 1.0, 9.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("grey", Vec3A::splat(0.5))],

@@ -267,6 +267,7 @@ mod tests {
 
     fn ball_scene() -> Scene {
         Scene {
+            media: Default::default(),
             settings: RenderSettings::default(),
             camera: Camera::new(Vec3A::new(0.0, 1.0, 5.0), Vec3A::new(0.0, 0.5, 0.0), Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("white", Vec3A::ONE)],

@@ -322,6 +322,7 @@ mod tests {
             ),
         ];
         Scene {
+            media: Default::default(),
             settings: RenderSettings {
                 width: 64,
                 height: 48,

@@ -400,6 +400,7 @@ pub fn scene_of(meshes: Vec<Arc<Mesh>>, objects: Vec<(Shape, u32)>, materials: V
         materials
     };
     Scene {
+        media: Default::default(),
         settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 0.0, 10.0), Vec3A::ZERO, Vec3A::Y, 45.0).expect("valid camera"),
         materials,

@@ -431,7 +431,7 @@ impl<'a> PhotonTracer<'a> {
         } else {
             Some(std::borrow::Cow::Borrowed(wrapper))
         };
-        let Some(m) = side.as_deref() else {
+        let Some(m) = side.as_deref().filter(|m| !m.null) else {
             if path.bounces >= self.max_depth {
                 return Step::Done;
             }

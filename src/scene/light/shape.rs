@@ -206,6 +206,7 @@ mod tests {
 
     fn scene_with(shape: Shape, meshes: Vec<Arc<Mesh>>) -> Scene {
         Scene {
+            media: Default::default(),
             settings: Default::default(),
             camera: crate::scene::Camera::new(Vec3A::Z * 5.0, Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("m", Vec3A::ONE)],

@@ -380,6 +380,7 @@ impl Ctx<'_> {
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
             roughness_v,
+            null: false,
             blend: None,
         })
     }

@@ -186,6 +186,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         }
     }
     let mut scene = Scene {
+        media: Default::default(),
         settings,
         camera,
         materials,

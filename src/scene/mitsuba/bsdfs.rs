@@ -148,6 +148,11 @@ impl Builder<'_> {
                     second,
                 }));
             }
+            "null" => {
+                // Scatters nothing; rays pass straight through (`src/bsdfs/null.cpp`).
+                m.null = true;
+                m.one_sided = false;
+            }
             "twosided" => {
                 let inner = p.children_of("bsdf")?;
                 let [(inner, _)] = <[_; 1]>::try_from(inner).map_err(|v: Vec<_>| {
@@ -186,7 +191,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, null, twosided and normalmap"
                 )))
             }
         }

@@ -5,7 +5,8 @@
 //! through typed getters and refuses any it did not read, and one module per
 //! plugin class maps each plugin to the scene model: [`sensor`] (camera,
 //! film, sampler, integrator), [`shapes`], [`bsdfs`], [`emitters`],
-//! [`textures`]. A plugin either maps exactly (the same image in
+//! [`textures`], [`media`] (homogeneous media and their phase functions,
+//! which `volpath` renders and `path` ignores). A plugin either maps exactly (the same image in
 //! expectation) or is refused with its file:line:column; wrappers that only
 //! add outputs (`moment`, `aov`) are rendered through with a warning.
 //! Spectra become RGB as Mitsuba's RGB variants make them ([`spectrum`]).
@@ -13,6 +14,7 @@
 mod bsdfs;
 mod cie;
 mod emitters;
+mod media;
 pub mod props;
 mod sensor;
 mod shapes;
@@ -63,6 +65,9 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         mesh_index: HashMap::new(),
         generated_index: HashMap::new(),
         objects: Vec::new(),
+        interfaces: Vec::new(),
+        media: Vec::new(),
+        medium_index: HashMap::new(),
         images: RefCell::new(HashMap::new()),
     };
     let mut settings = RenderSettings {
@@ -73,6 +78,9 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     let mut lights = Vec::new();
     let mut sensor = None;
     let mut integrator_seen: Option<&Origin> = None;
+    // Mitsuba's default integrator is `path`, which ignores media.
+    let mut media_handling = sensor::MediaHandling::Ignored;
+    let mut camera_medium = None;
     for e in &doc.root.children {
         if ids.is_referenced(e) {
             // A definition, instantiated where it is referenced.
@@ -85,7 +93,17 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                         .origin
                         .error("the scene has several sensors; caustic renders one camera"));
                 }
-                sensor = Some(sensor::sensor(&Plugin::new(e, &ids)?)?);
+                let plugin = Plugin::new(e, &ids)?;
+                // The medium the camera is in: Mitsuba takes any one medium
+                // object of the sensor, whatever its name.
+                let media = plugin.children_of("medium")?;
+                if let Some((_, second)) = media.get(1) {
+                    return Err(second.origin.error("a sensor takes at most one <medium>"));
+                }
+                if let Some((m, _)) = media.first() {
+                    camera_medium = Some(b.medium(m)?);
+                }
+                sensor = Some(sensor::sensor(&plugin)?);
             }
             "integrator" => {
                 if let Some(first) = integrator_seen {
@@ -95,16 +113,17 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                     )));
                 }
                 integrator_seen = Some(&e.origin);
-                sensor::integrator(&Plugin::new(e, &ids)?, &mut settings, &mut warnings)?;
+                media_handling = sensor::integrator(&Plugin::new(e, &ids)?, &mut settings, &mut warnings)?;
             }
             "shape" => b.shape(&Plugin::new(e, &ids)?)?,
             "emitter" => lights.push(b.emitter(&Plugin::new(e, &ids)?)?),
             // Definitions, used through <ref>.
             "bsdf" | "texture" | "spectrum" | "rfilter" | "film" | "sampler" => {}
             "medium" | "phase" | "volume" => {
-                return Err(e
-                    .origin
-                    .error(format!("<{}>: participating media are not supported yet", e.tag)))
+                return Err(e.origin.error(format!(
+                    "<{}> is not referenced: a medium is used through a shape's `interior` / `exterior` or the sensor",
+                    e.tag
+                )))
             }
             other => {
                 return Err(e.origin.error(format!(
@@ -132,8 +151,35 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     let meshes = b.load_meshes()?;
     let mesh_seconds = meshes_start.elapsed().as_secs_f64();
     let Builder {
-        materials, mut objects, ..
+        materials,
+        mut objects,
+        interfaces,
+        media,
+        ..
     } = b;
+    let media = match media_handling {
+        sensor::MediaHandling::Rendered => crate::scene::Media {
+            interfaces: if media.is_empty() { Vec::new() } else { interfaces },
+            list: media,
+            camera: camera_medium,
+            pass_through: crate::scene::PassThrough::Volumetric,
+        },
+        sensor::MediaHandling::Ignored => {
+            let at = integrator_seen.unwrap_or(&doc.root.origin);
+            if !media.is_empty() {
+                warnings.push(format!(
+                    "{}:{}: the integrator ignores participating media (as Mitsuba's `path` and `direct` do); `volpath` renders them",
+                    at.file.display(),
+                    at.place
+                ));
+            }
+            // Null surfaces (and thin sheets) as Mitsuba's `path` meets them.
+            crate::scene::Media {
+                pass_through: crate::scene::PassThrough::SurfaceBounce,
+                ..Default::default()
+            }
+        }
+    };
     for o in &mut objects {
         if let Shape::Mesh { mesh, smooth, .. } = &mut o.shape {
             // A `.serialized` shape's flags may ask for face normals.
@@ -155,6 +201,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         lights,
         meshes: meshes.meshes,
         objects,
+        media,
     };
     if scene.objects.is_empty() && scene.lights.is_empty() {
         return Err(doc.root.origin.error("the scene has no shape and no emitter"));
@@ -215,6 +262,12 @@ struct Builder<'a> {
     /// (shape element, flip) → generated mesh (cube, flipped rectangle).
     generated_index: HashMap<(usize, bool), u32>,
     objects: Vec<Object>,
+    /// Per object, the media on its sides.
+    interfaces: Vec<crate::scene::MediumInterface>,
+    /// The media the shapes and the sensor name.
+    media: Vec<crate::scene::HomogeneousMedium>,
+    /// `<medium>` element → index in `media`.
+    medium_index: HashMap<usize, u32>,
     images: RefCell<HashMap<(PathBuf, ColourSpace), Arc<Image>>>,
 }
 

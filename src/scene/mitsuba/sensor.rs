@@ -245,20 +245,42 @@ fn sampler(s: &Plugin) -> Result<(u32, u32), SceneError> {
     Ok((spp as u32, seed as u32))
 }
 
+/// Whether an integrator renders participating media and null surfaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MediaHandling {
+    /// `volpath`, `volpathmis`: media scatter and absorb, shadow rays pass
+    /// through null surfaces.
+    Rendered,
+    /// `path`, `direct`: Mitsuba ignores the media (rays travel as in
+    /// vacuum), and a null surface is a delta bounce that blocks shadow rays.
+    Ignored,
+}
+
 /// Applies an `<integrator>` to the settings; wrappers that only add
 /// outputs (`moment`, `aov`) return a warning and apply their integrator.
-pub fn integrator(p: &Plugin, settings: &mut RenderSettings, warnings: &mut Vec<String>) -> Result<(), SceneError> {
+pub fn integrator(
+    p: &Plugin,
+    settings: &mut RenderSettings,
+    warnings: &mut Vec<String>,
+) -> Result<MediaHandling, SceneError> {
     settings.integrator = IntegratorKind::Path;
     match p.kind {
         "path" | "volpath" | "volpathmis" => {
-            // Without media (refused where they appear) the volumetric
-            // path integrators are the path integrator.
+            // `volpathmis` samples distances with spectral MIS, which is what
+            // caustic's volumetric path tracer does for every medium: the
+            // same estimator as `volpath` in expectation.
+            let media = if p.kind == "path" {
+                MediaHandling::Ignored
+            } else {
+                MediaHandling::Rendered
+            };
             let depth = p.int("max_depth")?.unwrap_or(-1);
             settings.max_depth = mitsuba_depth(depth, p)?;
             // Russian roulette starts at caustic's own depth: unbiased either way.
             p.int("rr_depth")?;
             settings.hide_emitters = p.boolean("hide_emitters")?.unwrap_or(false);
-            p.finish()
+            p.finish()?;
+            Ok(media)
         }
         "direct" => {
             // Direct light with MIS between light and BSDF samples is the
@@ -272,7 +294,8 @@ pub fn integrator(p: &Plugin, settings: &mut RenderSettings, warnings: &mut Vec<
                 }
             }
             settings.hide_emitters = p.boolean("hide_emitters")?.unwrap_or(false);
-            p.finish()
+            p.finish()?;
+            Ok(MediaHandling::Ignored)
         }
         "moment" | "aov" => {
             p.string("aovs")?;
@@ -289,11 +312,12 @@ pub fn integrator(p: &Plugin, settings: &mut RenderSettings, warnings: &mut Vec<
                 p.origin().place,
                 p.what()
             ));
-            integrator(first, settings, warnings)?;
-            p.finish()
+            let media = integrator(first, settings, warnings)?;
+            p.finish()?;
+            Ok(media)
         }
         other => Err(p.error(format!(
-            "the integrator `{other}` is not supported: caustic renders `path` and `direct`"
+            "the integrator `{other}` is not supported: caustic renders `path`, `volpath`, `volpathmis` and `direct`"
         ))),
     }
 }

@@ -15,7 +15,7 @@ use crate::geometry::Mesh;
 use crate::math::Frame;
 use crate::math::{Transform, Vec2, Vec3, Vec3A};
 use crate::scene::load::SceneError;
-use crate::scene::{Cylinder, Disk, Material, Object, Quad, Shape, Sphere};
+use crate::scene::{Cylinder, Disk, Material, MediumInterface, Object, Quad, Shape, Sphere};
 use glam::{Affine3A, Mat4};
 
 /// Mitsuba's `cube`: 24 vertices (4 per face, with the face's normal and
@@ -67,11 +67,13 @@ impl Builder<'_> {
                 let objects = self.objects.len();
                 self.group_members(p, &Mat4::IDENTITY, "")?;
                 self.objects.truncate(objects);
+                self.interfaces.truncate(objects);
                 Ok(())
             }
             _ => {
-                let object = self.object(p, &Mat4::IDENTITY, None)?;
+                let (object, interface) = self.object(p, &Mat4::IDENTITY, None)?;
                 self.objects.push(object);
+                self.interfaces.push(interface);
                 Ok(())
             }
         }
@@ -128,18 +130,26 @@ impl Builder<'_> {
             }
             // `children_of` marked the emitters read: read the member afresh.
             let member = Plugin::new(member.element, member.ids())?;
-            let object = self.object(&member, to_world, Some(instance))?;
+            let (object, interface) = self.object(&member, to_world, Some(instance))?;
             self.objects.push(object);
+            self.interfaces.push(interface);
         }
         Ok(())
     }
 
-    /// The object of a `<shape>`, its `to_world` preceded by `parent`
-    /// (an instance's), its name prefixed by the instance's.
-    fn object(&mut self, p: &Plugin, parent: &Mat4, instance: Option<&str>) -> Result<Object, SceneError> {
-        if !p.children_of("medium")?.is_empty() {
-            return Err(p.error("participating media (`interior` / `exterior`) are not supported yet"));
-        }
+    /// The object of a `<shape>` and the media on its sides, its `to_world`
+    /// preceded by `parent` (an instance's), its name prefixed by the
+    /// instance's.
+    fn object(
+        &mut self,
+        p: &Plugin,
+        parent: &Mat4,
+        instance: Option<&str>,
+    ) -> Result<(Object, MediumInterface), SceneError> {
+        let interface = MediumInterface {
+            interior: self.shape_medium(p, "interior")?,
+            exterior: self.shape_medium(p, "exterior")?,
+        };
         let material = self.shape_material(p)?;
         let name = p
             .element
@@ -293,7 +303,7 @@ impl Builder<'_> {
             other => return Err(p.error(format!("the shape `{other}` is unknown"))),
         };
         p.finish()?;
-        Ok(Object { name, shape, material })
+        Ok((Object { name, shape, material }, interface))
     }
 
     /// The index of a mesh the front end builds (cube, flipped rectangle):
@@ -307,6 +317,20 @@ impl Builder<'_> {
         let index = self.mesh_ready(build());
         self.generated_index.insert(key, index);
         index
+    }
+
+    /// The medium a shape names `side` (`interior` or `exterior`), nested
+    /// or referenced.
+    fn shape_medium(&mut self, p: &Plugin, side: &str) -> Result<Option<u32>, SceneError> {
+        match p.child_named(side)? {
+            None => Ok(None),
+            Some(m) if m.element.tag != "medium" => Err(m.error(format!(
+                "`{side}` of {} must be a <medium>, not a <{}>",
+                p.what(),
+                m.element.tag
+            ))),
+            Some(m) => self.medium(&m).map(Some),
+        }
     }
 
     /// The material of a shape: its BSDF (or Mitsuba's default) and the
