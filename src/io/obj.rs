@@ -1,9 +1,9 @@
 //! Wavefront OBJ through the `tobj` crate: polygons triangulated, every
 //! object and group merged into one mesh, materials ignored (the scene file
-//! assigns materials). File normals are kept only when each vertex has one
-//! consistent normal (OBJ lets a vertex carry different normals on different
-//! faces, which per-vertex smooth shading cannot represent); otherwise they are
-//! computed. `tobj` reports no positions, so on error the loader finds the
+//! assigns materials). File normals are kept: a position that carries
+//! different normals on different faces (a hard edge) becomes one vertex per
+//! normal, as in Mitsuba's loader; when some corners name no normal, the
+//! normals are computed. `tobj` reports no positions, so on error the loader finds the
 //! first offending line itself.
 
 use super::source::{parse_f32, parse_i64, Source};
@@ -54,18 +54,53 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
     let (models, _materials) = tobj::load_obj_buf(&mut &text[..], &options, |_| Ok((Vec::new(), HashMap::new())))
         .map_err(|e| ParseError::new(locate(&text, &e), format!("invalid OBJ: {e}")))?;
 
+    // Does each position carry one normal? OBJ lets a position carry
+    // different normals on different faces (a hard edge); such a file is
+    // split into one vertex per (position, normal) pair, as Mitsuba's
+    // loader does, when every corner names a normal.
+    let mut position_normal: Vec<Option<u32>> = Vec::new();
+    let mut normals_consistent = true;
+    let mut every_corner_has_a_normal = true;
+    for model in &models {
+        let m = &model.mesh;
+        let offset = position_normal.len();
+        position_normal.resize(offset + m.positions.len() / 3, None);
+        if m.normal_indices.len() != m.indices.len() {
+            normals_consistent = false;
+            every_corner_has_a_normal = false;
+            continue;
+        }
+        for (&pi, &ni) in m.indices.iter().zip(&m.normal_indices) {
+            if m.normals.get(ni as usize * 3..ni as usize * 3 + 3).is_none() {
+                normals_consistent = false;
+                every_corner_has_a_normal = false;
+                continue;
+            }
+            let n = |i: u32| &m.normals[i as usize * 3..i as usize * 3 + 3];
+            let slot = &mut position_normal[offset + pi as usize];
+            match *slot {
+                None => *slot = Some(ni),
+                Some(old) if old == ni || n(old) == n(ni) => {}
+                Some(_) => normals_consistent = false,
+            }
+        }
+    }
+    let split_normals = !normals_consistent && every_corner_has_a_normal;
+
     // Vertices are (position, texture coordinate) pairs once the file has
     // UVs: a seam gives one position two UVs, so it becomes two vertices,
-    // whose normals still come from the position (`origin`).
+    // whose normals still come from the position (`origin`); with hard
+    // edges, (position, texture coordinate, normal) triples.
     let with_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    let split = with_uvs || split_normals;
     let mut positions: Vec<Vec3> = Vec::new();
     let mut origin: Vec<u32> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
+    let mut own_normals: Vec<Vec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut position_triangles: Vec<[u32; 3]> = Vec::new();
     let mut all_positions: Vec<Vec3> = Vec::new();
     let mut normals: Vec<Option<Vec3>> = Vec::new();
-    let mut normals_consistent = true;
     for model in &models {
         let m = &model.mesh;
         let offset = all_positions.len();
@@ -79,13 +114,14 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
                 .chunks_exact(3)
                 .map(|t| [t[0], t[1], t[2]].map(|i| i + offset as u32)),
         );
-        if with_uvs {
+        if split {
             let has_uv = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
-            let mut vertex_of: HashMap<(u32, u32), u32> = HashMap::new();
+            let mut vertex_of: HashMap<(u32, u32, u32), u32> = HashMap::new();
             let mut corners = Vec::with_capacity(m.indices.len());
             for (k, &pi) in m.indices.iter().enumerate() {
                 let ti = if has_uv { m.texcoord_indices[k] } else { u32::MAX };
-                let key = (pi + offset as u32, ti);
+                let ni = if split_normals { m.normal_indices[k] } else { u32::MAX };
+                let key = (pi + offset as u32, ti, ni);
                 let next = positions.len() as u32;
                 let v = *vertex_of.entry(key).or_insert_with(|| {
                     positions.push(all_positions[key.0 as usize]);
@@ -96,6 +132,10 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
                         .get(2 * ti as usize..2 * ti as usize + 2)
                         .map_or(Vec2::ZERO, |t| Vec2::new(t[0], 1.0 - t[1]));
                     uvs.push(uv);
+                    if split_normals {
+                        let n = &m.normals[3 * ni as usize..3 * ni as usize + 3];
+                        own_normals.push(Vec3::new(n[0], n[1], n[2]));
+                    }
                     next
                 });
                 corners.push(v);
@@ -105,22 +145,10 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
             }
             triangles.extend(corners.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
         }
-        if m.normal_indices.len() != m.indices.len() {
-            normals_consistent = false;
-            continue;
-        }
-        for (&pi, &ni) in m.indices.iter().zip(&m.normal_indices) {
-            let ni = ni as usize * 3;
-            let Some(n) = m.normals.get(ni..ni + 3) else {
-                normals_consistent = false;
-                break;
-            };
-            let n = Vec3::new(n[0], n[1], n[2]);
-            let slot = &mut normals[offset + pi as usize];
-            match slot {
-                None => *slot = Some(n),
-                Some(old) if *old == n => {}
-                Some(_) => normals_consistent = false,
+        if normals_consistent {
+            for (&pi, &ni) in m.indices.iter().zip(&m.normal_indices) {
+                let n = &m.normals[ni as usize * 3..ni as usize * 3 + 3];
+                normals[offset + pi as usize] = Some(Vec3::new(n[0], n[1], n[2]));
             }
         }
     }
@@ -135,12 +163,21 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
             format!("vertex {i} (counting from 0 in file order) has a non-finite coordinate"),
         ));
     }
-    if !with_uvs {
+    if !split {
         return Ok(Mesh::new(name, all_positions, position_triangles, normals)?);
     }
-    let normals = normals.unwrap_or_else(|| Mesh::angle_weighted_normals(&all_positions, &position_triangles));
-    let normals = origin.iter().map(|&o| normals[o as usize]).collect();
-    Ok(Mesh::new(name, positions, triangles, Some(normals))?.with_uvs(uvs)?)
+    let normals = if split_normals {
+        own_normals
+    } else {
+        let normals = normals.unwrap_or_else(|| Mesh::angle_weighted_normals(&all_positions, &position_triangles));
+        origin.iter().map(|&o| normals[o as usize]).collect()
+    };
+    let mesh = Mesh::new(name, positions, triangles, Some(normals))?;
+    if with_uvs {
+        Ok(mesh.with_uvs(uvs)?)
+    } else {
+        Ok(mesh)
+    }
 }
 
 /// 1-based line number of byte `offset`.
@@ -234,15 +271,14 @@ mod tests {
     }
 
     #[test]
-    fn inconsistent_normals_are_recomputed() {
+    fn hard_edges_split_their_vertices() {
+        // Vertices 2 and 3 carry normal 1 on the first face and 2 on the second.
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 1 0 0\nvn 0 1 0\n\
                     f 1//1 2//1 3//1\nf 2//2 4//2 3//2\n";
         let m = load_text(text).unwrap();
-        assert!(
-            m.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6),
-            "{:?}",
-            m.normals
-        );
+        assert_eq!(m.positions.len(), 6, "{:?}", m.positions);
+        assert_eq!(m.normals, vec![Vec3::X, Vec3::X, Vec3::X, Vec3::Y, Vec3::Y, Vec3::Y]);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [3, 4, 5]]);
     }
 
     #[test]
