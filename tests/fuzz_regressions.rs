@@ -1,15 +1,21 @@
 //! Inputs found by the fuzzers (`scripts/fuzz.sh`), kept in
 //! `tests/data/fuzz/<target>/`: each went through the same entry point as its
 //! fuzz target and once made it panic, hang or allocate too much. Every one
-//! must now give a clean `Ok` or `Err`, within the fuzz targets' memory limits. Names ending in `.ok` must
-//! load; every other input must be refused.
+//! must now give a clean `Ok` or `Err`, within the fuzz targets' memory
+//! limits. Names ending in `.ok` must load; every other input must be
+//! refused.
 
 use caustic::io::{parse_mesh_bytes, LoadLimits, MeshFormat};
 use caustic::memory::MemoryBudget;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// The limits of the fuzz targets (fuzz/fuzz_targets/*.rs).
+/// The `mitsuba` target's setting (the folder of fixed files an input is
+/// written into), the fuzz crate's own file.
+#[path = "../fuzz/src/mitsuba.rs"]
+mod fuzz_mitsuba;
+
+/// The limits of the fuzz targets (`caustic_fuzz::fuzz_limits`).
 fn fuzz_limits() -> LoadLimits {
     LoadLimits {
         max_input_bytes: 64 << 20,
@@ -100,4 +106,59 @@ fn scene_inputs() {
         let result = caustic::scene::parse_scene(text, &dir.path().join("fuzz.toml"));
         check(&path, started, result);
     }
+}
+
+#[test]
+fn serialized_inputs() {
+    let files = inputs("serialized");
+    assert!(!files.is_empty(), "no kept inputs for serialized");
+    for path in files {
+        let bytes = std::fs::read(&path).unwrap();
+        let started = Instant::now();
+        // As the target does: shape 0, then shape 1. The outcome of shape 0
+        // is what the name tells; shape 1 must only come back cleanly.
+        let result =
+            caustic::io::serialized::parse_serialized(&bytes, 0, "fuzz.serialized", &fuzz_limits()).map_err(|(_, m)| m);
+        let second = caustic::io::serialized::parse_serialized(&bytes, 1, "fuzz.serialized", &fuzz_limits());
+        if let Err((_, m)) = second {
+            assert!(!m.is_empty() && !m.contains('\n'), "{}: shape 1: `{m}`", path.display());
+        }
+        check(&path, started, result);
+    }
+}
+
+#[test]
+fn mitsuba_inputs() {
+    let files = inputs("mitsuba");
+    assert!(!files.is_empty(), "no kept inputs for mitsuba");
+    let setting = fuzz_mitsuba::Setting::new();
+    for path in files {
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(
+            !fuzz_mitsuba::skipped(&bytes),
+            "{}: the target skips it",
+            path.display()
+        );
+        let started = Instant::now();
+        let result = fuzz_mitsuba::load(&setting, &bytes);
+        check(&path, started, result);
+    }
+}
+
+/// The seeds of the `mitsuba` target load: a seed the front end refuses
+/// early would leave the plugins it was written for unfuzzed.
+#[test]
+fn mitsuba_seeds_load() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/mitsuba");
+    let setting = fuzz_mitsuba::Setting::new();
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let bytes = std::fs::read(&path).unwrap();
+        if let Err(e) = fuzz_mitsuba::load(&setting, &bytes) {
+            panic!("{}: {e}", path.display());
+        }
+        seeds += 1;
+    }
+    assert!(seeds >= 10, "{seeds} seeds");
 }

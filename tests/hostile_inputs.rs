@@ -124,6 +124,60 @@ fn texture_scene(file: &str) -> String {
     )
 }
 
+/// A Mitsuba scene: a `width` × 8 film (line 3) at `spp` samples (line
+/// 4), a point light, then `body` from line 7 on.
+fn mitsuba_text(width: &str, spp: &str, body: &str) -> String {
+    format!(
+        "<scene version=\"3.0.0\">\n\
+         <sensor type=\"perspective\">\n\
+         <film type=\"hdrfilm\"><integer name=\"width\" value=\"{width}\"/><integer name=\"height\" value=\"8\"/></film>\n\
+         <sampler type=\"independent\"><integer name=\"sample_count\" value=\"{spp}\"/></sampler>\n\
+         </sensor>\n\
+         <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"3\" z=\"3\"/></emitter>\n\
+         {body}\n</scene>\n"
+    )
+}
+
+/// [`mitsuba_text`] with an 8 × 8 film and 1 sample, written as `scene.xml`.
+fn mitsuba(dir: &Path, body: &str) -> Run {
+    Run::scene(write(dir, "scene.xml", mitsuba_text("8", "1", body)))
+}
+
+/// A `.serialized` file of one version-4 shape whose zlib stream holds
+/// `data` after the flags (single precision), the name and the counts.
+fn serialized(vertices: u64, triangles: u64, data: &[u8]) -> Vec<u8> {
+    let mut body = 0x1000u32.to_le_bytes().to_vec();
+    body.extend(b"m\0");
+    body.extend(vertices.to_le_bytes());
+    body.extend(triangles.to_le_bytes());
+    body.extend(data);
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(&body).unwrap();
+    let mut file = vec![0x1C, 0x04, 4, 0];
+    file.extend(z.finish().unwrap());
+    file.extend(0u64.to_le_bytes());
+    file.extend(1u32.to_le_bytes());
+    file
+}
+
+/// A `.serialized` triangle.
+fn serialized_tri() -> Vec<u8> {
+    let mut data = Vec::new();
+    for x in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+        data.extend(x.to_le_bytes());
+    }
+    for i in [0u32, 1, 2] {
+        data.extend(i.to_le_bytes());
+    }
+    serialized(3, 1, &data)
+}
+
+/// A shape reading `file` as `kind` (`obj`, `ply`, `serialized`), its
+/// `filename` property right after the `<shape>` tag.
+fn mitsuba_mesh(kind: &str, file: &str) -> String {
+    format!("<shape type=\"{kind}\"><string name=\"filename\" value=\"{file}\"/></shape>")
+}
+
 /// One hostile input.
 struct Case {
     /// Identifier, listed in `docs/hostile-inputs.md`.
@@ -657,6 +711,195 @@ fn cases() -> Vec<Case> {
             what: "a valid OBJ triangle (control case)",
             expect: None,
             setup: |d| with_mesh(d, "m.obj", OBJ_TRI),
+        },
+        // ------------------------------------------------- Mitsuba XML scenes
+        Case {
+            name: "xml-malformed",
+            what: "Mitsuba scene with an unclosed `<shape>`",
+            expect: Some(&["scene.xml:8:1: not a valid XML file: expected 'shape' tag, not 'scene' at 8:1"]),
+            setup: |d| mitsuba(d, "<shape type=\"sphere\">"),
+        },
+        Case {
+            name: "xml-billion-laughs-dtd",
+            what: "a DTD whose entities expand to 10^9 `lol`s (billion laughs)",
+            expect: Some(&["scene.xml:2:1: not a valid XML file: a DTD (`<!DOCTYPE`) is not allowed (its entities could expand without bound)"]),
+            setup: |d| {
+                let mut dtd = String::from("<?xml version=\"1.0\"?>\n<!DOCTYPE scene [\n<!ENTITY l0 \"lol\">\n");
+                for i in 1..10 {
+                    dtd += &format!("<!ENTITY l{i} \"{}\">\n", format!("&l{};", i - 1).repeat(10));
+                }
+                dtd += "]>\n";
+                let text = mitsuba_text("8", "1", "<shape type=\"sphere\"><string name=\"x\" value=\"&l9;\"/></shape>");
+                Run::scene(write(d, "scene.xml", dtd + &text))
+            },
+        },
+        Case {
+            name: "xml-billion-laughs-defaults",
+            what: "`<default>`s each naming the previous one ten times (10^10 bytes through `$`)",
+            expect: Some(&["scene.xml:7:328: `$l5` makes the value longer than 1 MiB (parameters that repeat each other grow exponentially)"]),
+            setup: |d| {
+                let mut body = String::from("<default name=\"l0\" value=\"lol\"/>");
+                for i in 1..11 {
+                    body += &format!("<default name=\"l{i}\" value=\"{}\"/>", format!("$l{}", i - 1).repeat(10));
+                }
+                mitsuba(d, &(body + "<shape type=\"sphere\"><string name=\"x\" value=\"$l10\"/></shape>"))
+            },
+        },
+        Case {
+            name: "xml-include-cycle",
+            what: "`a.xml` includes `b.xml`, which includes `a.xml`",
+            expect: Some(&["b.xml:2:3: an include cycle: `", "a.xml` is already being read (a.xml → b.xml → a.xml)"]),
+            setup: |d| {
+                write(d, "a.xml", "<scene version=\"3.0.0\">\n  <include filename=\"b.xml\"/>\n</scene>\n");
+                write(d, "b.xml", "<scene version=\"3.0.0\">\n  <include filename=\"a.xml\"/>\n</scene>\n");
+                mitsuba(d, "<include filename=\"a.xml\"/>")
+            },
+        },
+        Case {
+            name: "xml-include-bomb",
+            what: "14 files each including the next twice (32 766 includes)",
+            expect: Some(&["i13.xml:1:24: more than 4096 <include>s in all (files including others several times each multiply)"]),
+            setup: |d| {
+                for i in 0..14 {
+                    let next = format!("<include filename=\"i{}.xml\"/>", i + 1);
+                    write(d, &format!("i{i}.xml"), format!("<scene version=\"3.0.0\">{next}{next}</scene>"));
+                }
+                write(d, "i14.xml", "<scene version=\"3.0.0\"/>");
+                mitsuba(d, "<include filename=\"i0.xml\"/>")
+            },
+        },
+        Case {
+            name: "xml-include-missing",
+            what: "`<include>` of a file that does not exist",
+            expect: Some(&["scene.xml:7:1: cannot include: ", "nowhere.xml: cannot read the scene file: No such file or directory"]),
+            setup: |d| mitsuba(d, "<include filename=\"nowhere.xml\"/>"),
+        },
+        Case {
+            name: "xml-include-dev-zero",
+            what: "`<include filename=\"/dev/zero\"/>`",
+            expect: Some(&["scene.xml:7:1: cannot include: /dev/zero: the scene file is larger than 16777216 bytes"]),
+            setup: |d| mitsuba(d, "<include filename=\"/dev/zero\"/>"),
+        },
+        Case {
+            name: "xml-mesh-missing",
+            what: "`<shape type=\"obj\">` naming a file that does not exist",
+            expect: Some(&["scene.xml:7:19: mesh of object `obj@7:1`: ", "nowhere.obj: No such file or directory"]),
+            setup: |d| mitsuba(d, &mitsuba_mesh("obj", "nowhere.obj")),
+        },
+        Case {
+            name: "xml-ref-unknown-id",
+            what: "`<ref id=\"nothing\"/>` with no object of that id",
+            expect: Some(&["scene.xml:7:22: <ref id=\"nothing\">: no object has this id"]),
+            setup: |d| mitsuba(d, "<shape type=\"sphere\"><ref id=\"nothing\"/></shape>"),
+        },
+        Case {
+            name: "xml-ref-cycle",
+            what: "a `twosided` BSDF `a` whose nested BSDF is `<ref id=\"a\"/>`",
+            expect: Some(&["scene.xml:7:30: <ref id=\"a\"> is inside the object `a` it names (a reference cycle)"]),
+            setup: |d| {
+                mitsuba(d, "<bsdf type=\"twosided\" id=\"a\"><ref id=\"a\"/></bsdf><shape type=\"sphere\"><ref id=\"a\"/></shape>")
+            },
+        },
+        Case {
+            name: "xml-ref-chain-3000",
+            what: "3000 `twosided` BSDFs, each referencing the next",
+            expect: Some(&["scene.xml:37:32: objects nested more than 32 deep (each <ref> counted as a level)"]),
+            setup: |d| {
+                let mut body = String::new();
+                for i in 0..3000 {
+                    body += &format!("<bsdf type=\"twosided\" id=\"b{i}\"><ref id=\"b{}\"/></bsdf>\n", i + 1);
+                }
+                body += "<bsdf type=\"diffuse\" id=\"b3000\"/>\n<shape type=\"sphere\"><ref id=\"b0\"/></shape>";
+                mitsuba(d, &body)
+            },
+        },
+        Case {
+            name: "xml-blend-bomb",
+            what: "30 `blendbsdf`s, each blending the previous one with itself (2^30 BSDFs)",
+            expect: Some(&["scene.xml:9:1: <bsdf type=\"blendbsdf\">: the material is made of more than 256 BSDFs (blends naming blends through <ref>s multiply)"]),
+            setup: |d| {
+                let mut body = String::from("<bsdf type=\"diffuse\" id=\"b0\"/>\n");
+                for i in 1..=30 {
+                    body += &format!("<bsdf type=\"blendbsdf\" id=\"b{i}\"><ref id=\"b{0}\"/><ref id=\"b{0}\"/></bsdf>\n", i - 1);
+                }
+                mitsuba(d, &(body + "<shape type=\"sphere\"><ref id=\"b30\"/></shape>"))
+            },
+        },
+        Case {
+            name: "xml-nested-30000-deep",
+            what: "30 000 nested elements inside a shape",
+            expect: Some(&["scene.xml:7:211: elements nested more than 64 deep"]),
+            setup: |d| mitsuba(d, &format!("<shape type=\"sphere\">{}{}</shape>", "<a>".repeat(30_000), "</a>".repeat(30_000))),
+        },
+        Case {
+            name: "xml-fov-is-a-string",
+            what: "`<string name=\"fov\" value=\"x\"/>` on the sensor",
+            expect: Some(&["scene.xml:2:28: `fov` of <sensor type=\"perspective\"> is a <string>; expected <float> or <integer>"]),
+            setup: |d| {
+                let text = mitsuba_text("8", "1", "").replace("<sensor type=\"perspective\">", "<sensor type=\"perspective\"><string name=\"fov\" value=\"x\"/>");
+                Run::scene(write(d, "scene.xml", text))
+            },
+        },
+        Case {
+            name: "xml-width-is-a-float",
+            what: "`<float name=\"width\" value=\"abc\"/>` on the film",
+            expect: Some(&["scene.xml:3:22: `width` of <film type=\"hdrfilm\"> is a <float>; expected <integer>"]),
+            setup: |d| {
+                let text = mitsuba_text("8", "1", "").replace("<integer name=\"width\" value=\"8\"/>", "<float name=\"width\" value=\"abc\"/>");
+                Run::scene(write(d, "scene.xml", text))
+            },
+        },
+        Case {
+            name: "xml-radius-not-a-number",
+            what: "`<float name=\"radius\" value=\"abc\"/>` on a sphere",
+            expect: Some(&["scene.xml:7:22: `radius` = `abc` is not a finite number"]),
+            setup: |d| mitsuba(d, "<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>"),
+        },
+        Case {
+            name: "xml-width-1e9",
+            what: "film `width` 10^9",
+            expect: Some(&["scene.xml:3:1: <film type=\"hdrfilm\">: `width` = 1000000000: it must be in 1‥65536"]),
+            setup: |d| Run::scene(write(d, "scene.xml", mitsuba_text("1000000000", "1", "<shape type=\"sphere\"/>"))),
+        },
+        Case {
+            name: "xml-spp-1e12",
+            what: "sampler `sample_count` 10^12",
+            expect: Some(&["scene.xml:4:1: <sampler type=\"independent\">: `sample_count` = 1000000000000: it must be in 1‥1048576"]),
+            setup: |d| Run::scene(write(d, "scene.xml", mitsuba_text("8", "1000000000000", "<shape type=\"sphere\"/>"))),
+        },
+        Case {
+            name: "xml-define-malformed",
+            what: "`-D res=abc` for `<integer name=\"width\" value=\"$res\"/>`",
+            expect: Some(&["scene.xml:3:22: `width` = `abc` is not an integer"]),
+            setup: |d| Run::scene(write(d, "scene.xml", mitsuba_text("$res", "1", "<shape type=\"sphere\"/>"))).args(&["-D", "res=abc"]),
+        },
+        Case {
+            name: "serialized-truncated",
+            what: "a `.serialized` triangle cut in its zlib stream",
+            expect: Some(&["scene.xml:7:26: mesh of object `serialized@7:1`: ", "m.serialized: the last 4 bytes announce 1204971900 shapes, whose offsets do not fit the file (a truncated file?)"]),
+            setup: |d| {
+                let tri = serialized_tri();
+                write(d, "m.serialized", &tri[..tri.len() / 2]);
+                mitsuba(d, &mitsuba_mesh("serialized", "m.serialized"))
+            },
+        },
+        Case {
+            name: "serialized-zlib-bomb",
+            what: "a 64 KiB `.serialized` shape: 64 MiB of zeros, zlib-compressed, announcing 2^27 vertices (1.5 GiB)",
+            expect: Some(&["scene.xml:7:26: mesh of object `serialized@7:1`: ", "m.serialized: byte 4: 134217728 vertices and 1 triangles need 1610612748 bytes of data, more than the shape's 65209 compressed bytes can inflate to (at most 1032 × as many): a truncated file, wrong counts or a zlib bomb"]),
+            setup: |d| {
+                write(d, "m.serialized", serialized(1 << 27, 1, &vec![0; 64 << 20]));
+                mitsuba(d, &mitsuba_mesh("serialized", "m.serialized"))
+            },
+        },
+        Case {
+            name: "xml-serialized-valid-reference",
+            what: "a valid `.serialized` triangle in a Mitsuba scene (control case)",
+            expect: None,
+            setup: |d| {
+                write(d, "m.serialized", serialized_tri());
+                mitsuba(d, &mitsuba_mesh("serialized", "m.serialized"))
+            },
         },
     ]
 }

@@ -24,6 +24,12 @@ const DOUBLE_PRECISION: u32 = 0x2000;
 /// Most bytes of a `.serialized` file read.
 pub const MAX_SERIALIZED_BYTES: u64 = 8 << 30;
 
+/// Most bytes one compressed byte inflates to: DEFLATE's limit is about
+/// 1032 : 1 (a 258-byte match per 2 bits), so a shape whose counts need
+/// more data than this times its compressed size is refused before
+/// anything is inflated or allocated (a zlib bomb, or a lie in the counts).
+pub const MAX_INFLATE_RATIO: u64 = 1032;
+
 /// One shape of a `.serialized` file, and whether its flags ask for face
 /// normals.
 pub fn load_serialized(path: &Path, shape_index: u32, limits: &LoadLimits) -> Result<(Mesh, bool), MeshError> {
@@ -82,7 +88,10 @@ pub fn parse_serialized(
     let table = (count as usize)
         .checked_mul(width)
         .and_then(|t| (n - 4).checked_sub(t))
-        .ok_or((None, format!("{count} shapes do not fit the file's offset table")))?;
+        .ok_or((
+            None,
+            format!("the last 4 bytes announce {count} shapes, whose offsets do not fit the file (a truncated file?)"),
+        ))?;
     let at = table + shape_index as usize * width;
     let offset = if width == 4 {
         u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as u64
@@ -120,12 +129,25 @@ pub fn parse_serialized(
             limits.max_elements
         )));
     }
-    check_mesh_memory(vertices, triangles, limits, None).map_err(|e| (None, e.problem))?;
     let double = match flags & (SINGLE_PRECISION | DOUBLE_PRECISION) {
         SINGLE_PRECISION => false,
         DOUBLE_PRECISION => true,
         _ => return Err(z.fail(format!("flags {flags:#x} give no single precision or double precision"))),
     };
+    let reals_per_vertex = 3
+        + if flags & HAS_NORMALS != 0 { 3 } else { 0 }
+        + if flags & HAS_TEXCOORDS != 0 { 2 } else { 0 }
+        + if flags & HAS_COLOURS != 0 { 3 } else { 0 };
+    let data = u128::from(vertices) * reals_per_vertex * if double { 8 } else { 4 } + u128::from(triangles) * 12;
+    let compressed = (table - start - 4) as u64;
+    if data > u128::from(compressed) * u128::from(MAX_INFLATE_RATIO) {
+        return Err(z.fail(format!(
+            "{vertices} vertices and {triangles} triangles need {data} bytes of data, more than the shape's \
+             {compressed} compressed bytes can inflate to (at most {MAX_INFLATE_RATIO} × as many): \
+             a truncated file, wrong counts or a zlib bomb"
+        )));
+    }
+    check_mesh_memory(vertices, triangles, limits, None).map_err(|e| (None, e.problem))?;
     let nv = vertices as usize;
     let read_vec3 = |z: &mut Stream| -> Result<Vec<Vec3>, Failure> {
         let mut out = Vec::with_capacity(nv);

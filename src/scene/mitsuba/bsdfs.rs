@@ -14,6 +14,12 @@ use crate::scene::{
 };
 
 /// Mitsuba's default interior index of dielectrics (BK7).
+/// Most BSDFs one material may be made of. Blends and masks nest BSDFs
+/// that may be `<ref>`s to other blends: a chain of blends each naming the
+/// previous one twice doubles the tree at each level (2^30 BSDFs from 30
+/// short lines). Real materials hold a few.
+pub const MAX_BSDFS_PER_MATERIAL: usize = 256;
+
 const BK7: f32 = 1.5046;
 /// Mitsuba's default exterior index (air).
 const AIR: f32 = 1.000277;
@@ -32,6 +38,12 @@ fn blank(name: String) -> Material {
 impl Builder<'_> {
     /// The material of a `<bsdf>`.
     pub(super) fn bsdf(&self, p: &Plugin) -> Result<Material, SceneError> {
+        self.bsdfs_read.set(self.bsdfs_read.get() + 1);
+        if self.bsdfs_read.get() > MAX_BSDFS_PER_MATERIAL {
+            return Err(p.error(format!(
+                "the material is made of more than {MAX_BSDFS_PER_MATERIAL} BSDFs (blends naming blends through <ref>s multiply)"
+            )));
+        }
         let name = p
             .element
             .attr("id")

@@ -31,7 +31,7 @@ use crate::scene::{Light, Material, Object, RenderSettings, Scene, Shape};
 use crate::texture::{ColourSpace, Image};
 use props::{Ids, Plugin};
 use rayon::prelude::*;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -69,6 +69,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
         media: Vec::new(),
         medium_index: HashMap::new(),
         images: RefCell::new(HashMap::new()),
+        bsdfs_read: Cell::new(0),
     };
     let mut settings = RenderSettings {
         integrator: crate::scene::IntegratorKind::Path,
@@ -269,6 +270,8 @@ struct Builder<'a> {
     /// `<medium>` element → index in `media`.
     medium_index: HashMap<usize, u32>,
     images: RefCell<HashMap<(PathBuf, ColourSpace), Arc<Image>>>,
+    /// BSDFs read for the material being built (see [`bsdfs::MAX_BSDFS_PER_MATERIAL`]).
+    bsdfs_read: Cell<usize>,
 }
 
 impl Builder<'_> {

@@ -42,6 +42,12 @@ pub const PROPERTY_TAGS: &[&str] = &[
     "transform",
 ];
 
+/// Objects inside objects deeper than this, counting each `<ref>` as a level,
+/// are refused: the plugin readers recurse through nested and referenced
+/// objects, and a chain of thousands of BSDFs each referencing the next
+/// would overflow the stack. Real scenes nest a few levels.
+pub const MAX_OBJECT_DEPTH: usize = 32;
+
 /// Every object with an `id`, found anywhere in the scene.
 pub struct Ids<'a> {
     map: HashMap<&'a str, &'a Element>,
@@ -125,11 +131,42 @@ pub struct Plugin<'a> {
     props: Vec<(&'a str, &'a Element, Cell<bool>)>,
     children: Vec<Child<'a>>,
     ids: &'a Ids<'a>,
+    /// The objects this one is nested in or referenced from, the outermost
+    /// first: a `<ref>` to one of them closes a cycle.
+    ancestors: Vec<&'a Element>,
 }
 
 impl<'a> Plugin<'a> {
     /// The plugin `element` (a tag of [`OBJECT_TAGS`]), its references resolved.
     pub fn new(element: &'a Element, ids: &'a Ids<'a>) -> Result<Self, SceneError> {
+        Self::inside(element, ids, Vec::new())
+    }
+
+    /// This plugin read afresh (nothing marked as read), where it is.
+    pub fn fresh(&self) -> Result<Self, SceneError> {
+        Self::inside(self.element, self.ids, self.ancestors.clone())
+    }
+
+    /// The child `c` as a plugin inside this one; refuses a reference cycle
+    /// and nesting deeper than [`MAX_OBJECT_DEPTH`].
+    fn nested(&self, c: &Child<'a>) -> Result<Self, SceneError> {
+        let mut ancestors = self.ancestors.clone();
+        ancestors.push(self.element);
+        if ancestors.iter().any(|a| std::ptr::eq(*a, c.element)) {
+            let id = c.element.attr("id").unwrap_or("");
+            return Err(c.at.origin.error(format!(
+                "<ref id=\"{id}\"> is inside the object `{id}` it names (a reference cycle)"
+            )));
+        }
+        if ancestors.len() >= MAX_OBJECT_DEPTH {
+            return Err(c.at.origin.error(format!(
+                "objects nested more than {MAX_OBJECT_DEPTH} deep (each <ref> counted as a level)"
+            )));
+        }
+        Self::inside(c.element, self.ids, ancestors)
+    }
+
+    fn inside(element: &'a Element, ids: &'a Ids<'a>, ancestors: Vec<&'a Element>) -> Result<Self, SceneError> {
         element.only_attrs(&["type", "id", "name"])?;
         let kind = element.required("type")?;
         let mut props: Vec<(&str, &Element, Cell<bool>)> = Vec::new();
@@ -172,6 +209,7 @@ impl<'a> Plugin<'a> {
             props,
             children,
             ids,
+            ancestors,
         })
     }
 
@@ -370,7 +408,7 @@ impl<'a> Plugin<'a> {
             None => Ok(None),
             Some(c) => {
                 c.used.set(true);
-                Plugin::new(c.element, self.ids).map(Some)
+                self.nested(c).map(Some)
             }
         }
     }
@@ -381,7 +419,7 @@ impl<'a> Plugin<'a> {
         let mut out = Vec::new();
         for c in self.children.iter().filter(|c| c.element.tag == tag && !c.used.get()) {
             c.used.set(true);
-            out.push((Plugin::new(c.element, self.ids)?, c.at));
+            out.push((self.nested(c)?, c.at));
         }
         Ok(out)
     }

@@ -129,7 +129,7 @@ impl Builder<'_> {
                 ));
             }
             // `children_of` marked the emitters read: read the member afresh.
-            let member = Plugin::new(member.element, member.ids())?;
+            let member = member.fresh()?;
             let (object, interface) = self.object(&member, to_world, Some(instance))?;
             self.objects.push(object);
             self.interfaces.push(interface);
@@ -349,6 +349,7 @@ impl Builder<'_> {
             // The same definitions give the same material (read and checked once).
             return Ok(index);
         }
+        self.bsdfs_read.set(0);
         let mut material = match &bsdf {
             Some(b) => self.bsdf(b)?,
             None => {
