@@ -14,7 +14,7 @@ use caustic::scene::mitsuba::transform::parse_transform;
 use caustic::scene::mitsuba::xml::read_document;
 use caustic::scene::{load_scene_with, Light, Mesh, Scene, Shape};
 use glam::{Mat4, Vec4};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const SENSOR: &str = r#"<sensor type="perspective">
         <float name="fov" value="40"/>
@@ -22,12 +22,7 @@ const SENSOR: &str = r#"<sensor type="perspective">
         <film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="8"/></film>
     </sensor>"#;
 
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    std::fs::write(&path, text).unwrap();
-    path
-}
+use common::mitsuba::write;
 
 /// A scene with `body` after a sensor whose film width is `$w`.
 fn scene_text(body: &str) -> String {
@@ -40,12 +35,7 @@ fn load(dir: &Path, body: &str) -> Scene {
 }
 
 fn load_error(body: &str) -> String {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "scene.xml", &scene_text(body));
-    match load_mitsuba_scene(&path, &[]) {
-        Ok(_) => panic!("expected an error for {body}"),
-        Err(e) => e.to_string(),
-    }
+    common::mitsuba::error(&scene_text(body))
 }
 
 const SPHERE: &str = r#"<shape type="sphere"><float name="radius" value="0.5"/></shape>"#;

@@ -23,25 +23,16 @@ fn scene_text(integrator: &str, body: &str) -> String {
 }
 
 fn write(dir: &Path, text: &str) -> PathBuf {
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, text).unwrap();
-    path
+    common::mitsuba::write(dir, "scene.xml", text)
 }
 
 fn load(integrator: &str, body: &str) -> (Scene, Vec<String>) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), &scene_text(integrator, body));
-    let loaded = load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let loaded = common::mitsuba::load(&scene_text(integrator, body));
     (loaded.scene, loaded.warnings)
 }
 
 fn load_error(integrator: &str, body: &str) -> String {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), &scene_text(integrator, body));
-    match load_mitsuba_scene(&path, &[]) {
-        Ok(_) => panic!("expected an error for {body}"),
-        Err(e) => e.to_string(),
-    }
+    common::mitsuba::error(&scene_text(integrator, body))
 }
 
 const MEDIA: &str = r#"<medium type="homogeneous" id="smoke">

@@ -13,7 +13,7 @@ use caustic::math::{Ray, Vec2, Vec3A};
 use caustic::scene::mitsuba::load_mitsuba_scene;
 use caustic::scene::{parse_scene, Scene, Shape, SurfaceInteraction};
 use std::f32::consts::{FRAC_1_SQRT_2, PI, SQRT_2};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const SENSOR: &str = r#"<sensor type="perspective">
         <transform name="to_world"><lookat origin="0, 0, 9" target="0, 0, 0" up="0, 1, 0"/></transform>
@@ -23,29 +23,18 @@ const SENSOR: &str = r#"<sensor type="perspective">
 /// A textured BSDF, so that shading computes texture coordinates.
 const TEXTURED: &str = r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf>"#;
 
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
+use common::mitsuba::write;
 
 fn scene_text(body: &str) -> String {
     format!("<scene version=\"3.0.0\">\n    {SENSOR}\n{body}\n</scene>\n")
 }
 
 fn load(body: &str) -> Scene {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "scene.xml", &scene_text(body));
-    load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}")).scene
+    common::mitsuba::load(&scene_text(body)).scene
 }
 
 fn load_error(body: &str) -> String {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "scene.xml", &scene_text(body));
-    match load_mitsuba_scene(&path, &[]) {
-        Ok(_) => panic!("expected an error for {body}"),
-        Err(e) => e.to_string(),
-    }
+    common::mitsuba::error(&scene_text(body))
 }
 
 fn shade(scene: &Scene, origin: [f32; 3], dir: [f32; 3]) -> SurfaceInteraction {

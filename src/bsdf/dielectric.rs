@@ -79,7 +79,12 @@ impl SmoothDielectric {
 /// `R + T² R / (1 − R²)` and transmits the rest straight through (Mitsuba 3's
 /// `thindielectric`; absorption inside the sheet is neglected).
 pub fn thin_sheet_reflectance(model: FresnelModel, cos_i: f32, eta: f32) -> f32 {
-    let r = reflectance(model, cos_i.abs(), eta);
+    sheet_series(reflectance(model, cos_i.abs(), eta))
+}
+
+/// What a sheet whose faces each reflect `r` reflects in all:
+/// `r + (1 − r)² r / (1 − r²)` (1 under total internal reflection).
+pub fn sheet_series(r: f32) -> f32 {
     if r < 1.0 {
         let t = 1.0 - r;
         r + t * t * r / (1.0 - r * r)

@@ -25,6 +25,17 @@ pub struct Plastic {
     pub nonlinear: bool,
 }
 
+/// The base's albedo `kd` with the light that bounces between base and a
+/// coating of internal reflectance `f_dr`: `kd / (1 − F_dr)`, or `kd / (1 −
+/// kd F_dr)` when every bounce is tinted (`nonlinear`).
+pub(super) fn inter_reflected(kd: Vec3A, f_dr: f32, nonlinear: bool) -> Vec3A {
+    if nonlinear {
+        kd / (Vec3A::ONE - kd * f_dr)
+    } else {
+        kd / (1.0 - f_dr)
+    }
+}
+
 impl Plastic {
     /// Probability of sampling the coating's reflection when `F` of it is
     /// reflected (Mitsuba's weighting by the mean reflectances).
@@ -50,12 +61,7 @@ impl Plastic {
     }
 
     fn base(&self) -> Vec3A {
-        let f_dr = fresnel::diffuse_reflectance(1.0 / self.eta);
-        if self.nonlinear {
-            self.kd / (Vec3A::ONE - self.kd * f_dr)
-        } else {
-            self.kd / (1.0 - f_dr)
-        }
+        inter_reflected(self.kd, fresnel::diffuse_reflectance(1.0 / self.eta), self.nonlinear)
     }
 
     pub(super) fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {

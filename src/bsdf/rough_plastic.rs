@@ -35,12 +35,7 @@ pub struct RoughPlastic<'a> {
 impl<'a> RoughPlastic<'a> {
     /// The lobe of a base of albedo `kd` under a coating of index `eta`.
     pub fn new(kd: Vec3A, eta: f32, microfacet: Microfacet, nonlinear: bool, table: &'a CoatingTable) -> Self {
-        let f_dr = table.internal_reflectance;
-        let base = if nonlinear {
-            kd / (Vec3A::ONE - kd * f_dr)
-        } else {
-            kd / (1.0 - f_dr)
-        };
+        let base = super::plastic::inter_reflected(kd, table.internal_reflectance, nonlinear);
         let d_mean = (kd.x + kd.y + kd.z) / 3.0;
         Self {
             base,

@@ -87,9 +87,8 @@ impl DielectricInterface {
     /// faces' reflections, [`thin_sheet_reflectance`](super::dielectric::thin_sheet_reflectance)).
     pub fn reflectance(&self, model: FresnelModel, cos_i: f32, cos_t: f32) -> f32 {
         let r = fresnel(model, self.n1, self.n2, cos_i, cos_t);
-        if self.thin && r < 1.0 {
-            let t = 1.0 - r;
-            r + t * t * r / (1.0 - r * r)
+        if self.thin {
+            super::dielectric::sheet_series(r)
         } else {
             r
         }

@@ -6,4 +6,5 @@
 pub mod cli;
 pub mod images;
 pub mod metrics;
+pub mod mitsuba;
 pub mod scenes;

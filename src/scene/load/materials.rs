@@ -34,9 +34,10 @@ impl Ctx<'_> {
         }
         // Blends take copies of the materials they name, blends among them,
         // so they are filled in once every material exists.
-        let mut done: Vec<bool> = descs.values().map(|m| m.blend.is_none()).collect();
+        let in_order: Vec<&MaterialDesc> = descs.values().collect();
+        let mut done: Vec<bool> = in_order.iter().map(|m| m.blend.is_none()).collect();
         for i in 0..materials.len() {
-            self.fill_blend(i, descs, &index, &mut materials, &mut done, &mut Vec::new())?;
+            self.fill_blend(i, &in_order, &index, &mut materials, &mut done, &mut Vec::new())?;
         }
         Ok((materials, index))
     }
@@ -46,7 +47,7 @@ impl Ctx<'_> {
     fn fill_blend(
         &self,
         i: usize,
-        descs: &BTreeMap<String, MaterialDesc>,
+        descs: &[&MaterialDesc],
         index: &BTreeMap<String, u32>,
         materials: &mut [Material],
         done: &mut [bool],
@@ -55,7 +56,7 @@ impl Ctx<'_> {
         if done[i] {
             return Ok(());
         }
-        let desc = descs.values().nth(i).expect("one desc per material");
+        let desc = descs[i];
         let b = desc.blend.as_ref().expect("not done: a blend").get_ref();
         stack.push(i);
         let mut side = |s: &Option<Spanned<String>>| -> Result<Option<Material>, SceneError> {
