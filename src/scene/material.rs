@@ -174,6 +174,48 @@ impl std::fmt::Debug for CoatingTableCell {
     }
 }
 
+/// glTF 2.0's metallic-roughness material (the specification's Appendix B,
+/// with `KHR_materials_transmission`, `_ior`, `_volume` and `_clearcoat`):
+/// a Lambertian base under a GGX dielectric specular layer mixed with a
+/// metal whose normal-incidence reflectance is the base colour, optionally
+/// transmitting and under a clear coat. The base colour is the material's
+/// [`Material::diffuse`] (and its texture).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Principled {
+    /// Metalness in [0, 1]: 0 a dielectric, 1 a metal (F0 = base colour).
+    pub metallic: f32,
+    /// Perceptual roughness in [0, 1]; the GGX `alpha` is its square.
+    pub roughness: f32,
+    /// Index of refraction of the dielectric part (1.5: F0 = 4 %).
+    pub ior: f32,
+    /// Fraction of the dielectric base that is transmitted (tinted by the
+    /// base colour) instead of reflected diffusely, in [0, 1].
+    pub transmission: f32,
+    /// Transmitted light continues without bending (glTF's thin-walled
+    /// default, no `KHR_materials_volume`); else the surface bounds a
+    /// refracting solid of index [`ior`](Self::ior).
+    pub thin: bool,
+    /// Strength of a clear coat of index 1.5 over everything, in [0, 1].
+    pub clearcoat: f32,
+    /// Perceptual roughness of the clear coat.
+    pub clearcoat_roughness: f32,
+}
+
+impl Default for Principled {
+    /// glTF's defaults: a fully metallic, fully rough surface of index 1.5.
+    fn default() -> Self {
+        Self {
+            metallic: 1.0,
+            roughness: 1.0,
+            ior: 1.5,
+            transmission: 0.0,
+            thin: true,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
+        }
+    }
+}
+
 /// A named material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -197,6 +239,9 @@ pub struct Material {
     pub conductor: Option<Conductor>,
     /// Optional clear coating over the diffuse albedo.
     pub coating: Option<Coating>,
+    /// Optional metallic-roughness model (glTF's): the surface then scatters
+    /// by it, with [`diffuse`](Self::diffuse) as its base colour.
+    pub principled: Option<Principled>,
     /// Radiance emitted from the front of every surface with this material
     /// (W/m²/sr per channel; the side the geometric normal faces). Non-zero
     /// makes each object using it an area light that also reflects by the
@@ -312,6 +357,16 @@ pub struct MaterialTextures {
     pub conductor_roughness: Option<Texture>,
     /// Replaces [`Material::roughness_v`] (scalar).
     pub roughness_v: Option<Texture>,
+    /// Replaces [`Principled::metallic`] (scalar).
+    pub principled_metallic: Option<Texture>,
+    /// Replaces [`Principled::roughness`] (scalar).
+    pub principled_roughness: Option<Texture>,
+    /// Replaces [`Principled::transmission`] (scalar).
+    pub principled_transmission: Option<Texture>,
+    /// Replaces [`Principled::clearcoat`] (scalar).
+    pub principled_clearcoat: Option<Texture>,
+    /// Replaces [`Principled::clearcoat_roughness`] (scalar).
+    pub principled_clearcoat_roughness: Option<Texture>,
     /// Multiplies [`Material::emission`] (which then holds the strength).
     pub emission: Option<Texture>,
     /// Perturbs the shading normal.
@@ -340,6 +395,11 @@ impl MaterialTextures {
             ("dielectric.roughness", &self.dielectric_roughness),
             ("conductor.roughness", &self.conductor_roughness),
             ("roughness_v", &self.roughness_v),
+            ("principled.metallic", &self.principled_metallic),
+            ("principled.roughness", &self.principled_roughness),
+            ("principled.transmission", &self.principled_transmission),
+            ("principled.clearcoat", &self.principled_clearcoat),
+            ("principled.clearcoat_roughness", &self.principled_clearcoat_roughness),
             ("emission", &self.emission),
         ]
         .into_iter()
@@ -380,6 +440,7 @@ impl Material {
             dielectric: None,
             conductor: None,
             coating: None,
+            principled: None,
             emission: Vec3A::ZERO,
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
@@ -536,6 +597,14 @@ impl Material {
                 ..c
             }),
             coating: self.coating.clone(),
+            principled: self.principled.map(|p| Principled {
+                metallic: scalar(&t.principled_metallic, p.metallic).clamp(0.0, 1.0),
+                roughness: scalar(&t.principled_roughness, p.roughness).clamp(0.0, 1.0),
+                transmission: scalar(&t.principled_transmission, p.transmission).clamp(0.0, 1.0),
+                clearcoat: scalar(&t.principled_clearcoat, p.clearcoat).clamp(0.0, 1.0),
+                clearcoat_roughness: scalar(&t.principled_clearcoat_roughness, p.clearcoat_roughness).clamp(0.0, 1.0),
+                ..p
+            }),
             emission: self.emission_at(uv),
             one_sided: self.one_sided,
             microfacet: self.microfacet,

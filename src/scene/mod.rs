@@ -29,7 +29,7 @@ pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
     AlphaMask, Blend, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
-    MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, ShadingModel, COATING_TABLE_SIZE,
+    MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, Principled, ShadingModel, COATING_TABLE_SIZE,
 };
 pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
 pub use medium::Medium;

@@ -382,6 +382,7 @@ impl Ctx<'_> {
             microfacet,
             roughness_v,
             null: false,
+            principled: None,
             blend: None,
         })
     }
