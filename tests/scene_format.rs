@@ -476,12 +476,24 @@ fn principled_materials_read_their_keys() {
     assert_eq!((p.clearcoat, p.clearcoat_roughness), (1.0, 0.1));
     assert!(paint.textures.as_ref().unwrap().principled_roughness.is_some());
     assert_eq!(paint.diffuse, Vec3A::new(0.1, 0.2, 0.6));
-    let plain = scene.materials.iter().find(|m| m.name == "plain").unwrap().principled.unwrap();
+    let plain = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "plain")
+        .unwrap()
+        .principled
+        .unwrap();
     assert_eq!((plain.metallic, plain.roughness, plain.ior), (0.0, 0.5, 1.5));
     assert!(plain.thin && plain.transmission == 0.0 && plain.clearcoat == 0.0);
     for (body, message) in [
-        ("principled = { metallic = 1.5 }", "6:27: `metallic` = 1.5 must be in [0, 1]"),
-        ("principled = { ior = 0.5 }", "6:22: principled `ior` = 0.5 must be in [1, 10]"),
+        (
+            "principled = { metallic = 1.5 }",
+            "6:27: `metallic` = 1.5 must be in [0, 1]",
+        ),
+        (
+            "principled = { ior = 0.5 }",
+            "6:22: principled `ior` = 0.5 must be in [1, 10]",
+        ),
         (
             "coating = { ior = 1.5 }\nprincipled = { roughness = 0.2 }",
             "7:14: material `m` has both `coating` and `principled`",
