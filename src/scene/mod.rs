@@ -3,6 +3,7 @@
 //! into shading data.
 
 pub mod camera;
+pub mod compare;
 pub mod conductors;
 pub mod cutout;
 pub mod desc;
@@ -14,6 +15,7 @@ pub mod media;
 pub mod medium;
 pub mod metals;
 pub mod mitsuba;
+pub mod write;
 
 use crate::film::denoise::DenoiseQuality;
 pub use crate::film::{OutputSettings, ToneMap};

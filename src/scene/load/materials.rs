@@ -288,6 +288,20 @@ impl Ctx<'_> {
                 })
             }
         };
+        if let Some(n) = m.null.as_ref().filter(|n| *n.get_ref()) {
+            self.exclusive(
+                name,
+                "null",
+                n.span(),
+                &[
+                    ("mirror", m.mirror.is_some()),
+                    ("dielectric", m.dielectric.is_some()),
+                    ("conductor", m.conductor.is_some()),
+                    ("coating", m.coating.is_some()),
+                    ("blend", m.blend.is_some()),
+                ],
+            )?;
+        }
         let (emission, emission_tex) = self.colour_param(&m.emission, "emission", Vec3A::ZERO, None)?;
         let strength = match &m.emission_strength {
             None => 1.0,
@@ -381,7 +395,7 @@ impl Ctx<'_> {
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
             roughness_v,
-            null: false,
+            null: m.null.as_ref().is_some_and(|n| *n.get_ref()),
             principled: None,
             blend: None,
         })

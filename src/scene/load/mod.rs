@@ -15,12 +15,13 @@
 //! checked and the checks of single values, `settings` the `[render]`,
 //! `[photons]` and `[camera]` tables, `materials` and `lights` theirs,
 //! `objects` the objects, their mesh files, water surfaces and the
-//! `[medium]`; `error` defines [`SceneError`] and [`Place`].
+//! `[medium]`; `media` the `[media]` and where they are; `error` defines [`SceneError`] and [`Place`].
 
 mod ctx;
 mod error;
 mod lights;
 mod materials;
+mod media;
 mod objects;
 mod settings;
 mod textures;
@@ -29,11 +30,12 @@ pub use ctx::MAX_MAGNITUDE;
 pub use error::{Place, SceneError};
 pub use lights::{DEFAULT_AREA_LIGHT_SAMPLES, MAX_AREA_LIGHT_SAMPLES};
 pub use materials::{DEFAULT_DIFFUSE, DEFAULT_IOR, DEFAULT_SHININESS};
+pub use media::{DEFAULT_ALBEDO, DEFAULT_SIGMA_T};
 pub use objects::DEFAULT_WATER_RESOLUTION;
 pub use settings::{DEFAULT_VFOV_DEG, MAX_DEPTH, MAX_EXPOSURE_STOPS, MAX_PHOTON_GATHER};
 
 use crate::geometry::water::WaterSurface;
-use crate::scene::desc::{ObjectKind, SceneDesc};
+use crate::scene::desc::{IntegratorName, ObjectKind, SceneDesc};
 use crate::scene::{Object, Scene, Shape};
 use ctx::Ctx;
 use std::io::Read;
@@ -99,7 +101,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     };
     let mut settings = ctx.render(&desc.render)?;
     settings.photons = ctx.photons(&desc.photons)?;
-    let camera = ctx.camera(&desc.camera)?;
+    let camera = ctx.camera(desc.camera.get_ref(), desc.camera.span())?;
     let (materials, material_index) = ctx.materials(&desc.materials)?;
     let lights = desc
         .lights
@@ -185,8 +187,9 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
             }
         }
     }
+    let media = ctx.scene_media(&desc, desc.render.integrator == Some(IntegratorName::Volpath))?;
     let mut scene = Scene {
-        media: Default::default(),
+        media,
         settings,
         camera,
         materials,
