@@ -161,3 +161,114 @@ fn meshes_read_from_files_are_referenced_by_path() {
     assert!(text.contains("scenes/textures/bricks.png"), "{text}");
     assert!(Path::new(&written.referenced[0]).ends_with("scenes/meshes/card.obj"));
 }
+
+/// The keys `convert` writes for exactness (the camera's frame, a mesh's
+/// `matrix`, a disk's semi-axes) load what they say and refuse bad values
+/// at their place.
+#[test]
+fn the_exact_keys_load_and_are_checked_at_their_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("tri.off");
+    std::fs::write(&mesh, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    let text = r#"[camera]
+position = [0, 0, 5]
+forward = [0, 0, -1]
+right = [1, 0, 0]
+up = [0, 1, 0]
+
+[[objects]]
+type = "mesh"
+file = "tri.off"
+matrix = [[2, 0, 0, 1], [0, 3, 0, 2], [0, 0, 4, 3]]
+material = "m"
+
+[[objects]]
+type = "disk"
+center = [0, 0, 0]
+u = [2, 0, 0]
+v = [0, 1, 0]
+flip_normals = true
+material = "m"
+
+[materials.m]
+"#;
+    let path = dir.path().join("s.toml");
+    let parse = |t: &str| caustic::scene::parse_scene(t, &path).map_err(|e| e.to_string());
+    let scene = parse(text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.camera.right, caustic::math::Vec3A::X);
+    assert_eq!(scene.camera.forward, -caustic::math::Vec3A::Z);
+    match &scene.objects[0].shape {
+        caustic::scene::Shape::Mesh { transform, .. } => {
+            let p = transform.point(caustic::math::Vec3A::ONE);
+            assert_eq!(p, caustic::math::Vec3A::new(3.0, 5.0, 7.0));
+        }
+        other => panic!("{other:?}"),
+    }
+    match &scene.objects[1].shape {
+        caustic::scene::Shape::Disk(d) => {
+            assert_eq!(
+                (d.a, d.b),
+                (caustic::math::Vec3A::new(2.0, 0.0, 0.0), caustic::math::Vec3A::Y)
+            );
+            assert_eq!(d.normal, -caustic::math::Vec3A::Z);
+        }
+        other => panic!("{other:?}"),
+    }
+    let cases = [
+        (
+            "right = [1, 0, 0]",
+            "right = [1, 0.5, 0]",
+            "s.toml:4:9",
+            "`right` = [1, 0.5, 0] must be a unit vector",
+        ),
+        (
+            "right = [1, 0, 0]",
+            "right = [0, 1, 0]",
+            "s.toml:4:9",
+            "must be orthogonal",
+        ),
+        ("right = [1, 0, 0]\n", "", "s.toml:3:11", "needs `right`"),
+        (
+            "forward = [0, 0, -1]",
+            "look_at = [0, 0, 0]",
+            "s.toml:4:9",
+            "`right` goes with `forward`",
+        ),
+        (
+            "[0, 0, 4, 3]]",
+            "[0, 0, 0, 3]]",
+            "s.toml:10:10",
+            "the mesh `matrix` is singular",
+        ),
+        (
+            "matrix = [[2",
+            "scale = 2\nmatrix = [[2",
+            "s.toml:10:9",
+            "`scale` with `matrix`",
+        ),
+        (
+            "[0, 0, 4, 3]]",
+            "[0, 0, 4]]",
+            "s.toml:10:",
+            "expected an array of 4 numbers, found 3",
+        ),
+        (
+            "v = [0, 1, 0]",
+            "v = [4, 0, 0]",
+            "s.toml:17:5",
+            "`u` and `v` are parallel",
+        ),
+        ("v = [0, 1, 0]\n", "", "s.toml:16:5", "needs `v`"),
+        (
+            "u = [2, 0, 0]",
+            "radius = 1\nu = [2, 0, 0]",
+            "s.toml:16:10",
+            "`radius` does not apply",
+        ),
+    ];
+    for (from, to, place, message) in cases {
+        assert!(text.contains(from), "{from}");
+        let e = parse(&text.replacen(from, to, 1)).expect_err(to);
+        assert!(e.contains(place) && e.contains(message), "{to}: {e}");
+    }
+}
