@@ -114,6 +114,9 @@ fn comparable(m: &Material) -> Material {
         if let Some(n) = &mut t.normal_map {
             unnamed(&mut n.texture);
         }
+        if let Some(b) = &mut t.bump_map {
+            unnamed(&mut b.texture);
+        }
         if let Some(a) = &mut t.alpha {
             unnamed(&mut a.texture);
         }

@@ -395,6 +395,10 @@ pub struct MaterialDesc {
     pub normal_map: Option<Spanned<ParamDesc>>,
     /// Scale of the normal map's x and y.
     pub normal_scale: Option<Spanned<f64>>,
+    /// A bump map: a scalar height texture.
+    pub bump_map: Option<Spanned<ParamDesc>>,
+    /// Multiplies the bump map's gradient.
+    pub bump_scale: Option<Spanned<f64>>,
     /// Alpha cutout mask (a scalar texture).
     pub alpha: Option<Spanned<ParamDesc>>,
     /// Mask values below it are holes.

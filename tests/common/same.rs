@@ -57,6 +57,9 @@ fn comparable(m: &Material, names: Names) -> Material {
         if let Some(n) = &mut t.normal_map {
             image(&mut n.texture);
         }
+        if let Some(b) = &mut t.bump_map {
+            image(&mut b.texture);
+        }
         if let Some(a) = &mut t.alpha {
             image(&mut a.texture);
         }

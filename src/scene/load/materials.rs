@@ -78,12 +78,12 @@ impl Ctx<'_> {
             let m = materials[j].clone();
             if m.textures
                 .as_ref()
-                .is_some_and(|t| t.normal_map.is_some() || t.alpha.is_some())
+                .is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some() || t.alpha.is_some())
             {
                 return Err(self.invalid(
                     s.span(),
                     format!(
-                        "`{}` has a normal map or an alpha cutout: give them to the blend itself",
+                        "`{}` has a normal map, a bump map or an alpha cutout: give them to the blend itself",
                         s.get_ref()
                     ),
                 ));
@@ -342,6 +342,21 @@ impl Ctx<'_> {
             });
         } else if let Some(s) = &m.normal_scale {
             return Err(self.invalid(s.span(), "`normal_scale` without a `normal_map`"));
+        }
+        if let Some(b) = &m.bump_map {
+            if m.normal_map.is_some() {
+                return Err(self.invalid(b.span(), "a material takes `normal_map` or `bump_map`, not both"));
+            }
+            let scale = match &m.bump_scale {
+                None => 1.0,
+                Some(s) => self.number(s, "bump_scale")?,
+            };
+            textures.bump_map = Some(crate::scene::BumpMap {
+                texture: self.texture_param(b, "bump_map", Usage::Scalar)?,
+                scale,
+            });
+        } else if let Some(s) = &m.bump_scale {
+            return Err(self.invalid(s.span(), "`bump_scale` without a `bump_map`"));
         }
         if let Some(a) = &m.alpha {
             let cutoff = match &m.alpha_cutoff {

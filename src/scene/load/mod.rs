@@ -173,15 +173,19 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         if let Shape::Mesh { mesh, .. } = &o.shape {
             let material = &materials[o.material as usize];
             let mesh = &meshes[*mesh as usize];
-            if material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
-                && mesh.uvs.is_empty()
-                && mesh.tangents.is_empty()
+            let bumped = material.textures.as_ref().is_some_and(|t| t.bump_map.is_some());
+            if (bumped && mesh.uvs.is_empty())
+                || (material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
+                    && mesh.uvs.is_empty()
+                    && mesh.tangents.is_empty())
             {
                 return Err(ctx.invalid(
                     desc.objects[i].material.span(),
                     format!(
-                        "material `{}` has a normal map, but mesh `{}` has no texture coordinates to orient it",
-                        material.name, mesh.name
+                        "material `{}` has a {} map, but mesh `{}` has no texture coordinates to orient it",
+                        material.name,
+                        if bumped { "bump" } else { "normal" },
+                        mesh.name
                     ),
                 ));
             }

@@ -168,6 +168,13 @@ fn material(m: &Material, dir: &Path) -> Result<Table, WriteError> {
         );
         t.insert("normal_scale".into(), num(n.scale));
     }
+    if let Some(b) = &tex.bump_map {
+        t.insert(
+            "bump_map".into(),
+            texture(&Some(b.texture.clone()))?.expect("a texture"),
+        );
+        t.insert("bump_scale".into(), num(b.scale));
+    }
     if let Some(a) = &tex.alpha {
         let value = match &a.texture {
             Texture::Constant(c) if c.x == c.y && c.y == c.z => num(c.x),
