@@ -24,6 +24,7 @@ impl MeshPlan {
     /// The mesh files referenced by path.
     pub(super) fn referenced(&self) -> Vec<PathBuf> {
         let mut out: Vec<PathBuf> = self.source.iter().flatten().cloned().collect();
+        out.sort();
         out.dedup();
         out
     }
