@@ -440,6 +440,7 @@ impl Ctx<'_> {
             roughness_v,
             null: false,
             principled,
+            disney: None,
             blend: None,
         })
     }
