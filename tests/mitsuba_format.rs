@@ -145,6 +145,35 @@ fn transforms_compose_each_operation_after_the_previous() {
 }
 
 #[test]
+fn principled_reads_its_numbers_textures_and_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load(
+        dir.path(),
+        r#"<shape type="sphere"><bsdf type="principled">
+            <rgb name="base_color" value="0.2, 0.4, 0.6"/>
+            <float name="specular" value="0"/>
+            <float name="spec_trans" value="0.5"/>
+            <texture name="sheen" type="checkerboard"><float name="color0" value="0.2"/><float name="color1" value="0.9"/></texture>
+            <float name="clearcoat_sampling_rate" value="2"/>
+        </bsdf></shape>
+        <shape type="sphere"><bsdf type="principled"><float name="eta" value="1.33"/></bsdf></shape>"#,
+    );
+    let first = &scene.materials[scene.objects[0].material as usize];
+    let d = first.disney.unwrap();
+    assert!(first.one_sided && first.diffuse == Vec3A::new(0.2, 0.4, 0.6));
+    // A specular of 0 under refraction becomes 1e-3, as in Mitsuba.
+    let eta = 2.0 / (1.0 - (0.08f32 * 1e-3).sqrt()) - 1.0;
+    assert!(
+        (d.eta - eta).abs() < 1e-6 && d.spec_trans == 0.5 && d.roughness == 0.5,
+        "{d:?}"
+    );
+    assert_eq!(d.clearcoat_sampling_rate, 2.0);
+    assert!(first.textures.as_ref().unwrap().disney_sheen.is_some());
+    let second = scene.materials[scene.objects[1].material as usize].disney.unwrap();
+    assert_eq!(second.eta, 1.33);
+}
+
+#[test]
 fn plugins_build_the_scene_model() {
     let dir = tempfile::tempdir().unwrap();
     let scene = load(
@@ -274,6 +303,14 @@ fn what_caustic_does_not_read_is_refused_at_its_place() {
             r#"<shape type="sphere"><bsdf type="roughplastic"><texture name="alpha" type="checkerboard"/></bsdf></shape>"#,
             "textured `alpha` is not supported by roughplastic",
         ),
+        (
+            r#"<shape type="sphere"><bsdf type="principled"><float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf></shape>"#,
+            "give `eta` or `specular`, not both",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="principledthin"/></shape>"#,
+            "the BSDF `principledthin` is not supported",
+        ),
     ];
     for (body, message) in cases {
         let e = load_error(body);
@@ -343,6 +380,16 @@ fn layered_and_mixed_materials_agree_with_mitsuba() {
 #[test]
 fn bump_maps_agree_with_mitsuba() {
     let (ratio, relmse) = against_mitsuba("bump");
+    assert!((ratio - Vec3A::ONE).abs().max_element() < 0.01, "mean ratio {ratio}");
+    assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
+}
+
+/// Mitsuba's `principled` (every reflection lobe at once, an anisotropic
+/// metal with a textured anisotropy, a refracting sphere with a textured
+/// transmission, a sheen floor) against Mitsuba's render.
+#[test]
+fn principled_materials_agree_with_mitsuba() {
+    let (ratio, relmse) = against_mitsuba("disney");
     assert!((ratio - Vec3A::ONE).abs().max_element() < 0.01, "mean ratio {ratio}");
     assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
 }

@@ -11,13 +11,15 @@
 //!
 //! Lobes: [`phong`] (the original report's Lambert, Phong / Blinn-Phong and
 //! mirror), [`dielectric`] (smooth and rough glass), [`conductor`] (smooth
-//! and rough metals; named presets in `scene::metals`), [`plastic`] (coated diffuse);
+//! and rough metals; named presets in `scene::metals`), [`plastic`] (coated diffuse),
+//! [`principled`] (glTF's metallic-roughness), [`disney`] (Mitsuba's `principled`);
 //! [`fresnel`] and [`microfacet`] are their building blocks; [`specular`]
 //! holds the world-space reflection and refraction shared with the Whitted
 //! integrator and the photon tracer.
 
 pub mod conductor;
 pub mod dielectric;
+pub mod disney;
 pub mod fresnel;
 pub mod microfacet;
 pub mod null;
@@ -34,6 +36,7 @@ use crate::math::{Vec2, Vec3A};
 use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
 use dielectric::{RoughDielectric, SmoothDielectric, ThinDielectric};
+use disney::Disney;
 use microfacet::{Microfacet, SMOOTH_ALPHA};
 use null::Null;
 use phong::{Highlight, Lambert, Mirror};
@@ -111,6 +114,8 @@ enum Lobe<'a> {
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
     Principled(Principled),
+    /// Mitsuba's `principled` (Burley's Disney BSDF).
+    Disney(Disney),
     /// Mitsuba's `null`, or a blend's hole: light continues straight through, unchanged.
     Null(Null),
 }
@@ -125,6 +130,7 @@ impl Lobe<'_> {
             Lobe::Plastic(p) => p.eval(wo, wi),
             Lobe::RoughPlastic(p) => p.eval(wo, wi),
             Lobe::Principled(p) => p.eval(wo, wi, transport),
+            Lobe::Disney(d) => d.eval(wo, wi, transport),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -142,6 +148,7 @@ impl Lobe<'_> {
             Lobe::Plastic(p) => p.pdf(wo, wi),
             Lobe::RoughPlastic(p) => p.pdf(wo, wi),
             Lobe::Principled(p) => p.pdf(wo, wi),
+            Lobe::Disney(d) => d.pdf(wo, wi),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -163,6 +170,7 @@ impl Lobe<'_> {
             Lobe::Plastic(p) => p.sample(wo, uc, u),
             Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
             Lobe::Principled(p) => p.sample(wo, uc, u, transport),
+            Lobe::Disney(d) => d.sample(wo, uc, u, transport),
             Lobe::Null(n) => n.sample(wo),
         }
     }
@@ -274,6 +282,9 @@ impl<'a> Bsdf<'a> {
                 }),
             };
             b.push(lobe, 1.0);
+        } else if let Some(d) = m.disney {
+            // One-sided like Mitsuba's `principled` unless wrapped in `twosided`.
+            b.push(Lobe::Disney(Disney::new(m.diffuse, d)), 1.0);
         } else if let Some(p) = m.principled {
             let lobe = Principled {
                 base: m.diffuse,
@@ -371,6 +382,7 @@ impl<'a> Bsdf<'a> {
         self.lobes().iter().any(|(l, _)| match l {
             Lobe::RoughConductor(c) => c.microfacet.is_anisotropic(),
             Lobe::RoughDielectric(d) => d.microfacet.is_anisotropic(),
+            Lobe::Disney(d) => d.microfacet.is_anisotropic(),
             _ => false,
         })
     }

@@ -119,6 +119,12 @@ fn warnings_of(m: &Material, integrator: IntegratorKind, has_delta_light: bool) 
         }
         return out;
     }
+    if m.disney.is_some() && whitted {
+        out.push(
+            "the Whitted integrator lights Mitsuba's `principled` directly and shows no reflection or refraction in it"
+                .into(),
+        );
+    }
     if let Some(p) = m.principled {
         if set(m.specular) {
             out.push(

@@ -245,6 +245,10 @@ fn kind_text(m: &crate::scene::Material) -> String {
             p.metallic, p.roughness, p.ior, p.transmission, p.thin, p.clearcoat, p.clearcoat_roughness
         );
     }
+    if let Some(d) = m.disney {
+        // Every field: the Debug form names them all.
+        text += &format!(" disney {d:?}");
+    }
     if let Some(b) = m.blend.as_deref() {
         let side = |s: &Option<crate::scene::Material>| match s {
             None => "hole".to_string(),
@@ -689,6 +693,11 @@ mod tests {
         assert_ne!(base, principled);
         s.materials[0].principled.as_mut().unwrap().clearcoat = 0.5;
         assert_ne!(principled, fingerprint(&s, AccelKind::KdTree, ""));
+        s.materials[0].disney = Some(crate::scene::Disney::default());
+        let disney = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(principled, disney);
+        s.materials[0].disney.as_mut().unwrap().sheen = 0.5;
+        assert_ne!(disney, fingerprint(&s, AccelKind::KdTree, ""));
         let mut s = scene();
         s.media.list.push(crate::scene::HomogeneousMedium {
             name: "fog".into(),

@@ -216,6 +216,69 @@ impl Default for Principled {
     }
 }
 
+/// Mitsuba 3's `principled` BSDF (Burley 2012/2015, "Physically Based
+/// Shading at Disney" and "Extending the Disney BRDF to a BSDF with
+/// Integrated Subsurface Scattering", as `src/bsdfs/principled.cpp`
+/// implements it): a diffuse base with retro-reflection, fake subsurface
+/// (`flatness`) and sheen, a GGX specular lobe that blends a dielectric
+/// (index [`eta`](Self::eta)), a tinted Schlick term and a metal, a rough
+/// refraction, and a GTR1 clear coat. The base colour is the material's
+/// [`Material::diffuse`] (and its texture). A weight of 0 turns its lobe off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disney {
+    /// Burley's roughness: the GGX `alpha` is its square (at least 0.001).
+    pub roughness: f32,
+    /// Anisotropy: `alpha` stretched along `∂p/∂u` by `1 / sqrt(1 − 0.9 a)`.
+    pub anisotropic: f32,
+    /// Metalness: blends toward a Schlick metal whose `F0` is the base colour.
+    pub metallic: f32,
+    /// Fraction of the dielectric that refracts instead of scattering diffusely.
+    pub spec_trans: f32,
+    /// Index of the inside relative to the outside (Mitsuba's `eta`, or from
+    /// `specular` as `2 / (1 − sqrt(0.08 specular)) − 1`).
+    pub eta: f32,
+    /// Tints the dielectric's specular reflection toward the base colour.
+    pub spec_tint: f32,
+    /// Strength of the sheen at grazing angles.
+    pub sheen: f32,
+    /// Tints the sheen toward the base colour.
+    pub sheen_tint: f32,
+    /// Blends the diffuse toward Hanrahan–Krueger's fake subsurface.
+    pub flatness: f32,
+    /// Strength of the clear coat.
+    pub clearcoat: f32,
+    /// Glossiness of the clear coat: its GTR1 `alpha` goes from 0.1 to 0.001.
+    pub clearcoat_gloss: f32,
+    /// Relative rate of sampling the diffuse lobe.
+    pub diffuse_sampling_rate: f32,
+    /// Relative rate of sampling the main specular lobe.
+    pub specular_sampling_rate: f32,
+    /// Relative rate of sampling the clear coat.
+    pub clearcoat_sampling_rate: f32,
+}
+
+impl Default for Disney {
+    /// Mitsuba's defaults: roughness 0.5, `specular` 0.5, everything else off.
+    fn default() -> Self {
+        Self {
+            roughness: 0.5,
+            anisotropic: 0.0,
+            metallic: 0.0,
+            spec_trans: 0.0,
+            eta: 2.0 / (1.0 - (0.08f32 * 0.5).sqrt()) - 1.0,
+            spec_tint: 0.0,
+            sheen: 0.0,
+            sheen_tint: 0.0,
+            flatness: 0.0,
+            clearcoat: 0.0,
+            clearcoat_gloss: 0.0,
+            diffuse_sampling_rate: 1.0,
+            specular_sampling_rate: 1.0,
+            clearcoat_sampling_rate: 1.0,
+        }
+    }
+}
+
 /// A named material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -242,6 +305,8 @@ pub struct Material {
     /// Optional metallic-roughness model (glTF's): the surface then scatters
     /// by it, with [`diffuse`](Self::diffuse) as its base colour.
     pub principled: Option<Principled>,
+    /// Mitsuba's `principled` (Burley's Disney BSDF).
+    pub disney: Option<Disney>,
     /// Radiance emitted from the front of every surface with this material
     /// (W/m²/sr per channel; the side the geometric normal faces). Non-zero
     /// makes each object using it an area light that also reflects by the
@@ -377,6 +442,26 @@ pub struct MaterialTextures {
     pub principled_clearcoat: Option<Texture>,
     /// Replaces [`Principled::clearcoat_roughness`] (scalar).
     pub principled_clearcoat_roughness: Option<Texture>,
+    /// Replaces [`Disney::roughness`] (scalar).
+    pub disney_roughness: Option<Texture>,
+    /// Replaces [`Disney::anisotropic`] (scalar).
+    pub disney_anisotropic: Option<Texture>,
+    /// Replaces [`Disney::metallic`] (scalar).
+    pub disney_metallic: Option<Texture>,
+    /// Replaces [`Disney::spec_trans`] (scalar).
+    pub disney_spec_trans: Option<Texture>,
+    /// Replaces [`Disney::spec_tint`] (scalar).
+    pub disney_spec_tint: Option<Texture>,
+    /// Replaces [`Disney::sheen`] (scalar).
+    pub disney_sheen: Option<Texture>,
+    /// Replaces [`Disney::sheen_tint`] (scalar).
+    pub disney_sheen_tint: Option<Texture>,
+    /// Replaces [`Disney::flatness`] (scalar).
+    pub disney_flatness: Option<Texture>,
+    /// Replaces [`Disney::clearcoat`] (scalar).
+    pub disney_clearcoat: Option<Texture>,
+    /// Replaces [`Disney::clearcoat_gloss`] (scalar).
+    pub disney_clearcoat_gloss: Option<Texture>,
     /// Multiplies [`Material::emission`] (which then holds the strength).
     pub emission: Option<Texture>,
     /// Perturbs the shading normal.
@@ -412,6 +497,16 @@ impl MaterialTextures {
             ("principled.transmission", &self.principled_transmission),
             ("principled.clearcoat", &self.principled_clearcoat),
             ("principled.clearcoat_roughness", &self.principled_clearcoat_roughness),
+            ("disney.roughness", &self.disney_roughness),
+            ("disney.anisotropic", &self.disney_anisotropic),
+            ("disney.metallic", &self.disney_metallic),
+            ("disney.spec_trans", &self.disney_spec_trans),
+            ("disney.spec_tint", &self.disney_spec_tint),
+            ("disney.sheen", &self.disney_sheen),
+            ("disney.sheen_tint", &self.disney_sheen_tint),
+            ("disney.flatness", &self.disney_flatness),
+            ("disney.clearcoat", &self.disney_clearcoat),
+            ("disney.clearcoat_gloss", &self.disney_clearcoat_gloss),
             ("emission", &self.emission),
         ]
         .into_iter()
@@ -454,6 +549,7 @@ impl Material {
             conductor: None,
             coating: None,
             principled: None,
+            disney: None,
             emission: Vec3A::ZERO,
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
@@ -521,12 +617,14 @@ impl Material {
     #[inline]
     pub fn uses_uv(&self) -> bool {
         // Anisotropic roughness is oriented by the tangent.
-        let own = self.textures.as_deref().is_some_and(|t| t.uses_uv()) || self.roughness_v.is_some();
+        let anisotropic = |m: &Material| m.roughness_v.is_some() || m.disney.is_some_and(|d| d.anisotropic != 0.0);
+        let own = self.textures.as_deref().is_some_and(|t| t.uses_uv()) || anisotropic(self);
         if self.blend.is_none() {
             return own;
         }
         self.layers().iter().any(|m| {
             m.textures.as_deref().is_some_and(|t| t.uses_uv())
+                || anisotropic(m)
                 || m.blend
                     .as_deref()
                     .is_some_and(|b| b.weight_texture.as_ref().is_some_and(|t| !t.is_constant()))
@@ -617,6 +715,19 @@ impl Material {
                 clearcoat: scalar(&t.principled_clearcoat, p.clearcoat).clamp(0.0, 1.0),
                 clearcoat_roughness: scalar(&t.principled_clearcoat_roughness, p.clearcoat_roughness).clamp(0.0, 1.0),
                 ..p
+            }),
+            disney: self.disney.map(|d| Disney {
+                roughness: scalar(&t.disney_roughness, d.roughness),
+                anisotropic: scalar(&t.disney_anisotropic, d.anisotropic),
+                metallic: scalar(&t.disney_metallic, d.metallic),
+                spec_trans: scalar(&t.disney_spec_trans, d.spec_trans),
+                spec_tint: scalar(&t.disney_spec_tint, d.spec_tint),
+                sheen: scalar(&t.disney_sheen, d.sheen),
+                sheen_tint: scalar(&t.disney_sheen_tint, d.sheen_tint),
+                flatness: scalar(&t.disney_flatness, d.flatness),
+                clearcoat: scalar(&t.disney_clearcoat, d.clearcoat),
+                clearcoat_gloss: scalar(&t.disney_clearcoat_gloss, d.clearcoat_gloss),
+                ..d
             }),
             emission: self.emission_at(uv),
             one_sided: self.one_sided,

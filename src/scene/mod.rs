@@ -30,8 +30,9 @@ pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
-    AlphaMask, Blend, BumpMap, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
-    MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, Principled, ShadingModel, COATING_TABLE_SIZE,
+    AlphaMask, Blend, BumpMap, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, Disney, FresnelModel,
+    Material, MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, Principled, ShadingModel,
+    COATING_TABLE_SIZE,
 };
 pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
 pub use medium::Medium;

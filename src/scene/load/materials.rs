@@ -470,6 +470,7 @@ impl Ctx<'_> {
             roughness_v,
             null: m.null.as_ref().is_some_and(|n| *n.get_ref()),
             principled,
+            disney: None,
             blend: None,
         })
     }

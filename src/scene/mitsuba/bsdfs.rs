@@ -10,7 +10,8 @@ use crate::scene::conductors::CONDUCTORS;
 use crate::scene::ior::{ior_names, named_ior};
 use crate::scene::load::SceneError;
 use crate::scene::{
-    Blend, Coating, Conductor, Dielectric, FresnelModel, Material, MaterialTextures, MicrofacetDistribution, NormalMap,
+    Blend, Coating, Conductor, Dielectric, Disney, FresnelModel, Material, MaterialTextures, MicrofacetDistribution,
+    NormalMap,
 };
 
 /// Mitsuba's default interior index of dielectrics (BK7).
@@ -120,6 +121,12 @@ impl Builder<'_> {
                     nonlinear: p.boolean("nonlinear")?.unwrap_or(false),
                     table: Default::default(),
                 });
+            }
+            "principled" => {
+                let (c, t) = self.colour(p, "base_color", Vec3A::splat(0.5), SpectrumUse::Reflectance)?;
+                m.diffuse = c;
+                textures.diffuse = t;
+                m.disney = Some(self.disney(p, &mut textures)?);
             }
             "blendbsdf" | "mask" => {
                 let (weight_name, default) = if p.kind == "mask" {
@@ -233,7 +240,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, null, twosided, normalmap and bumpmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, principled, blendbsdf, mask, null, twosided, normalmap and bumpmap"
                 )))
             }
         }
@@ -242,6 +249,74 @@ impl Builder<'_> {
             m.textures = Some(Box::new(textures));
         }
         Ok(m)
+    }
+
+    /// The parameters of `principled` (`src/bsdfs/principled.cpp`), each
+    /// scalar one a number or a texture, into their `disney_*` slots.
+    fn disney(&self, p: &Plugin, textures: &mut MaterialTextures) -> Result<Disney, SceneError> {
+        type Slot = fn(&mut MaterialTextures) -> &mut Option<crate::texture::Texture>;
+        type Field = fn(&mut Disney) -> &mut f32;
+        // Mitsuba's `get_flag`: the refraction is on when `spec_trans` is
+        // given, unless as the number 0.
+        let mut has_spec_trans = false;
+        let mut d = Disney::default();
+        let weights: [(&str, f32, Field, Slot); 10] = [
+            ("roughness", 0.5, |d| &mut d.roughness, |t| &mut t.disney_roughness),
+            (
+                "anisotropic",
+                0.0,
+                |d| &mut d.anisotropic,
+                |t| &mut t.disney_anisotropic,
+            ),
+            ("metallic", 0.0, |d| &mut d.metallic, |t| &mut t.disney_metallic),
+            ("spec_trans", 0.0, |d| &mut d.spec_trans, |t| &mut t.disney_spec_trans),
+            ("spec_tint", 0.0, |d| &mut d.spec_tint, |t| &mut t.disney_spec_tint),
+            ("sheen", 0.0, |d| &mut d.sheen, |t| &mut t.disney_sheen),
+            ("sheen_tint", 0.0, |d| &mut d.sheen_tint, |t| &mut t.disney_sheen_tint),
+            ("flatness", 0.0, |d| &mut d.flatness, |t| &mut t.disney_flatness),
+            ("clearcoat", 0.0, |d| &mut d.clearcoat, |t| &mut t.disney_clearcoat),
+            (
+                "clearcoat_gloss",
+                0.0,
+                |d| &mut d.clearcoat_gloss,
+                |t| &mut t.disney_clearcoat_gloss,
+            ),
+        ];
+        for (name, default, field, slot) in &weights {
+            let given = p.has(name);
+            let (value, texture) = self.scalar(p, name, *default)?;
+            if *name == "spec_trans" {
+                has_spec_trans = given && (texture.is_some() || value != 0.0);
+            }
+            *field(&mut d) = value;
+            *slot(textures) = texture;
+        }
+        let rate = |name: &str| p.float_checked(name, 1.0, "a sampling rate ≥ 0", |r| r >= 0.0);
+        d.diffuse_sampling_rate = rate("diffuse_reflectance_sampling_rate")?;
+        d.specular_sampling_rate = rate("main_specular_sampling_rate")?;
+        d.clearcoat_sampling_rate = rate("clearcoat_sampling_rate")?;
+        if p.has("eta") && p.has("specular") {
+            return Err(p.error("give `eta` or `specular`, not both (as in Mitsuba)"));
+        }
+        d.eta = if p.has("eta") {
+            let eta = p.float_checked("eta", 1.5, "an index > 0", |e| e > 0.0)?;
+            // Mitsuba: an index of 1 cannot refract.
+            if has_spec_trans && eta == 1.0 {
+                1.001
+            } else {
+                eta
+            }
+        } else {
+            let mut specular = p.float_checked("specular", 0.5, "in [0, 12.5) (12.5 is an infinite index)", |s| {
+                (0.0..12.5).contains(&s)
+            })?;
+            // Mitsuba: a specular of 0 (an index of 1) cannot refract.
+            if has_spec_trans && specular == 0.0 {
+                specular = 1.0e-3;
+            }
+            2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+        };
+        Ok(d)
     }
 
     /// The roughness of `rough*` plugins (0 for the smooth ones): sets the

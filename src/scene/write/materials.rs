@@ -122,7 +122,13 @@ fn material(m: &Material, dir: &Path) -> Result<Table, WriteError> {
         }
         t.insert("conductor".into(), Value::Table(s));
     }
-    if m.roughness_v.is_some() && m.dielectric.is_none() && m.conductor.is_none() {
+    if m.disney.is_some() {
+        return Err(unsupported(
+            part(),
+            "Mitsuba's `principled` BSDF has no TOML spelling (caustic's `principled` table is glTF's model)",
+        ));
+    }
+    if m.roughness_v.is_some() && m.dielectric.is_none() && m.conductor.is_none() && m.disney.is_none() {
         return Err(unsupported(part(), "`roughness_v` without a dielectric or a conductor"));
     }
     if let Some(c) = &m.coating {
