@@ -7,7 +7,9 @@
 use caustic::bsdf::{Bsdf, FresnelModel, Transport};
 use caustic::math::rng::Domain;
 use caustic::math::{Rng, Vec3A};
-use caustic::scene::{Coating, Conductor, Dielectric, Material, MicrofacetDistribution, Mirror, ShadingModel};
+use caustic::scene::{
+    Coating, Conductor, Dielectric, Material, MicrofacetDistribution, Mirror, Principled, ShadingModel,
+};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f32::consts::PI;
 
@@ -173,6 +175,74 @@ fn thin_glass() -> Material {
     m
 }
 
+/// glTF's metallic-roughness material.
+fn principled(base: Vec3A, p: Principled) -> Material {
+    let mut m = Material::diffuse("principled", base);
+    m.principled = Some(p);
+    m
+}
+
+fn metal_rough(metallic: f32, roughness: f32) -> Principled {
+    Principled {
+        metallic,
+        roughness,
+        ..Principled::default()
+    }
+}
+
+/// The principled materials the sampling and energy tests cover: dielectric,
+/// metal and mixed, coated, thin and solid transmission.
+fn principled_cases(base: Vec3A) -> Vec<(&'static str, Material)> {
+    vec![
+        ("principled dielectric 0.5", principled(base, metal_rough(0.0, 0.5))),
+        ("principled metal 0.4", principled(base, metal_rough(1.0, 0.4))),
+        ("principled mixed 0.3", principled(base, metal_rough(0.4, 0.3))),
+        (
+            "principled coated",
+            principled(
+                base,
+                Principled {
+                    clearcoat: 0.7,
+                    clearcoat_roughness: 0.25,
+                    ..metal_rough(0.2, 0.6)
+                },
+            ),
+        ),
+        (
+            "principled smooth coat over rough base",
+            principled(
+                base,
+                Principled {
+                    clearcoat: 1.0,
+                    ..metal_rough(0.0, 0.7)
+                },
+            ),
+        ),
+        ("principled smooth dielectric", principled(base, metal_rough(0.0, 0.0))),
+        (
+            "principled thin transmission 0.5",
+            principled(
+                base,
+                Principled {
+                    transmission: 0.8,
+                    ..metal_rough(0.0, 0.5)
+                },
+            ),
+        ),
+        (
+            "principled solid transmission 0.5",
+            principled(
+                base,
+                Principled {
+                    transmission: 1.0,
+                    thin: false,
+                    ..metal_rough(0.0, 0.5)
+                },
+            ),
+        ),
+    ]
+}
+
 fn bsdf(m: &Material) -> Bsdf<'_> {
     Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance)
 }
@@ -240,6 +310,105 @@ fn microfacet_lobes_sample_their_density() {
             &bsdf(&beckmann(anisotropic(glass(0.4), 0.1))),
             wo,
         );
+    }
+}
+
+#[test]
+fn principled_lobes_sample_their_density() {
+    let base = Vec3A::new(0.8, 0.5, 0.2);
+    for (name, m) in principled_cases(base) {
+        for wo in outgoing() {
+            chi2(name, &bsdf(&m), wo);
+        }
+    }
+    // Solid transmission seen from inside: the rough interface alone.
+    let (name, m) = principled_cases(base).pop().unwrap();
+    for wo in [direction(PI - 0.4, 3.0), direction(PI - 1.1, 0.5)] {
+        chi2(name, &bsdf(&m), wo);
+    }
+}
+
+#[test]
+fn principled_glass_is_the_rough_dielectric_tinted_by_its_base() {
+    let tint = Vec3A::new(0.9, 0.6, 0.3);
+    let mut rng = Rng::new(17, Domain::Analysis, 0, 0);
+    for roughness in [0.3f32, 0.7] {
+        let p = principled(
+            tint,
+            Principled {
+                transmission: 1.0,
+                thin: false,
+                ..metal_rough(0.0, roughness)
+            },
+        );
+        let mut g = glass(roughness * roughness);
+        g.dielectric.as_mut().unwrap().tint = tint;
+        let (bp, bg) = (bsdf(&p), bsdf(&g));
+        for _ in 0..2000 {
+            let wo = caustic::math::sampling::uniform_sphere(rng.vec2());
+            let wi = caustic::math::sampling::uniform_sphere(rng.vec2());
+            let (fp, fg) = (bp.eval(wo, wi), bg.eval(wo, wi));
+            assert!(
+                (fp - fg).abs().max_element() <= 1e-4 * fg.max_element().max(1.0),
+                "roughness {roughness}: principled {fp} against glass {fg} at {wo} → {wi}"
+            );
+        }
+    }
+}
+
+#[test]
+fn principled_matches_the_gltf_formula_at_normal_incidence() {
+    // wo = wi = n: h = n, F = ((η − 1)/(η + 1))² = 0.04, D = 1/(π α²), G = 1:
+    // f = (1 − F) c / π + F / (4 π α²) for a dielectric, c / (4 π α²) for a metal.
+    let c = Vec3A::new(0.8, 0.4, 0.1);
+    let (r, alpha) = (0.5f32, 0.25f32);
+    let n = Vec3A::Z;
+    let f = bsdf(&principled(c, metal_rough(0.0, r))).eval(n, n);
+    let expected = c * (0.96 / PI) + Vec3A::splat(0.04 / (4.0 * PI * alpha * alpha));
+    assert!((f - expected).abs().max_element() < 1e-4, "{f} against {expected}");
+    let f = bsdf(&principled(c, metal_rough(1.0, r))).eval(n, n);
+    let expected = c / (4.0 * PI * alpha * alpha);
+    assert!((f - expected).abs().max_element() < 1e-4, "{f} against {expected}");
+    // A clear coat of strength k reflects k F(1.5) = 0.04 k, and lets 1 − 0.04 k through.
+    let coated = principled(
+        c,
+        Principled {
+            clearcoat: 0.5,
+            clearcoat_roughness: r,
+            ..metal_rough(1.0, r)
+        },
+    );
+    let f = bsdf(&coated).eval(n, n);
+    let expected = c / (4.0 * PI * alpha * alpha) * 0.98 + Vec3A::splat(0.02 / (4.0 * PI * alpha * alpha));
+    assert!((f - expected).abs().max_element() < 1e-4, "{f} against {expected}");
+}
+
+#[test]
+fn smooth_principled_glass_and_mirror_keep_all_the_light() {
+    let mut rng = Rng::new(19, Domain::Analysis, 0, 0);
+    let glass = principled(
+        Vec3A::ONE,
+        Principled {
+            transmission: 1.0,
+            thin: false,
+            ..metal_rough(0.0, 0.0)
+        },
+    );
+    let thin = principled(
+        Vec3A::ONE,
+        Principled {
+            transmission: 1.0,
+            ..metal_rough(0.0, 0.0)
+        },
+    );
+    let mirror = principled(Vec3A::ONE, metal_rough(1.0, 0.0));
+    for (name, m) in [("glass", glass), ("thin", thin), ("mirror", mirror)] {
+        let b = Bsdf::for_material(&m, FresnelModel::Exact, Transport::Importance);
+        assert!(b.is_delta(), "{name}");
+        for wo in [direction(0.4, 0.0), direction(1.2, 1.0)] {
+            let (a, _) = albedo(&b, wo, &mut rng);
+            assert!((a - Vec3A::ONE).abs().max_element() < 1e-3, "{name} from {wo}: {a}");
+        }
     }
 }
 
@@ -314,6 +483,10 @@ fn no_bsdf_reflects_more_than_it_receives() {
         ("beckmann rough plastic white", beckmann(rough_plastic(1.0, 0.6, false))),
         ("anisotropic gold", anisotropic(gold(0.1), 0.5)),
     ];
+    let cases = cases
+        .into_iter()
+        .chain(principled_cases(Vec3A::ONE))
+        .collect::<Vec<_>>();
     for (name, m) in &cases {
         let b = bsdf(m);
         for wo in outgoing().into_iter().chain([direction(1.5, 0.0)]) {

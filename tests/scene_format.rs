@@ -364,6 +364,7 @@ fn documentation_covers_every_key() {
         format!("{cam}[materials.m.dielectric]\nzzz = 1\n"),
         format!("{cam}[materials.m.blend]\nzzz = 1\n"),
         format!("{cam}[materials.m.coating]\nzzz = 1\n"),
+        format!("{cam}[materials.m.principled]\nzzz = 1\n"),
         format!("{cam}[[lights]]\nzzz = 1\n"),
         format!("{cam}[[objects]]\nzzz = 1\n"),
         "zzz = 1\n".to_string(),
@@ -454,5 +455,54 @@ fn blends_name_other_materials() {
             .unwrap_err()
             .to_string();
         assert!(e.contains(message) && e.contains("blend.toml:"), "{body}: {e}");
+    }
+}
+
+/// The principled table's keys, their defaults and textures, and its
+/// errors.
+#[test]
+fn principled_materials_read_their_keys() {
+    let head = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n";
+    let text = format!(
+        "{head}[textures.rough]\ntype = \"checkerboard\"\ncolour0 = 0.2\ncolour1 = 0.7\n\n\
+         [materials.paint]\ndiffuse = [0.1, 0.2, 0.6]\n\
+         principled = {{ metallic = 0.25, roughness = \"rough\", ior = 1.45, transmission = 0.5, thin = false, \
+         clearcoat = 1.0, clearcoat_roughness = 0.1 }}\n\n[materials.plain]\nprincipled = {{}}\n"
+    );
+    let scene = parse_scene(&text, Path::new("principled.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let paint = scene.materials.iter().find(|m| m.name == "paint").unwrap();
+    let p = paint.principled.unwrap();
+    assert_eq!((p.metallic, p.ior, p.transmission, p.thin), (0.25, 1.45, 0.5, false));
+    assert_eq!((p.clearcoat, p.clearcoat_roughness), (1.0, 0.1));
+    assert!(paint.textures.as_ref().unwrap().principled_roughness.is_some());
+    assert_eq!(paint.diffuse, Vec3A::new(0.1, 0.2, 0.6));
+    let plain = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "plain")
+        .unwrap()
+        .principled
+        .unwrap();
+    assert_eq!((plain.metallic, plain.roughness, plain.ior), (0.0, 0.5, 1.5));
+    assert!(plain.thin && plain.transmission == 0.0 && plain.clearcoat == 0.0);
+    for (body, message) in [
+        (
+            "principled = { metallic = 1.5 }",
+            "6:27: `metallic` = 1.5 must be in [0, 1]",
+        ),
+        (
+            "principled = { ior = 0.5 }",
+            "6:22: principled `ior` = 0.5 must be in [1, 10]",
+        ),
+        (
+            "coating = { ior = 1.5 }\nprincipled = { roughness = 0.2 }",
+            "7:14: material `m` has both `coating` and `principled`",
+        ),
+        ("principled = { sheen = 1 }", "6:16: unknown field `sheen`"),
+    ] {
+        let e = parse_scene(&format!("{head}[materials.m]\n{body}\n"), Path::new("principled.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("principled.toml:") && e.contains(message), "{body}: {e}");
     }
 }

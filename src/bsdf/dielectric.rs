@@ -136,7 +136,7 @@ pub struct RoughDielectric {
 
 /// The generalised half vector of `wo` and `wi` (pointing to +z) and the
 /// ratio ηt/ηi (1 for reflection); `None` when degenerate.
-fn half_vector(wo: Vec3A, wi: Vec3A, eta: f32) -> Option<(Vec3A, f32, bool)> {
+pub(super) fn half_vector(wo: Vec3A, wi: Vec3A, eta: f32) -> Option<(Vec3A, f32, bool)> {
     if wo.z == 0.0 || wi.z == 0.0 {
         return None;
     }

@@ -23,6 +23,7 @@ pub mod microfacet;
 pub mod null;
 pub mod phong;
 pub mod plastic;
+pub mod principled;
 pub mod rough_plastic;
 pub mod specular;
 
@@ -37,6 +38,7 @@ use microfacet::{Microfacet, SMOOTH_ALPHA};
 use null::Null;
 use phong::{Highlight, Lambert, Mirror};
 use plastic::Plastic;
+use principled::Principled;
 use rough_plastic::RoughPlastic;
 
 /// What a path carries: radiance from the camera, or power (importance)
@@ -108,6 +110,7 @@ enum Lobe<'a> {
     RoughConductor(RoughConductor),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
+    Principled(Principled),
     /// Mitsuba's `null`, or a blend's hole: light continues straight through, unchanged.
     Null(Null),
 }
@@ -121,6 +124,7 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.eval(wo, wi),
             Lobe::Plastic(p) => p.eval(wo, wi),
             Lobe::RoughPlastic(p) => p.eval(wo, wi),
+            Lobe::Principled(p) => p.eval(wo, wi, transport),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -137,6 +141,7 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.pdf(wo, wi),
             Lobe::Plastic(p) => p.pdf(wo, wi),
             Lobe::RoughPlastic(p) => p.pdf(wo, wi),
+            Lobe::Principled(p) => p.pdf(wo, wi),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -157,6 +162,7 @@ impl Lobe<'_> {
             Lobe::RoughConductor(c) => c.sample(wo, u),
             Lobe::Plastic(p) => p.sample(wo, uc, u),
             Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
+            Lobe::Principled(p) => p.sample(wo, uc, u, transport),
             Lobe::Null(n) => n.sample(wo),
         }
     }
@@ -170,12 +176,16 @@ impl Lobe<'_> {
             | Lobe::SmoothConductor(_)
             | Lobe::Null(_) => 1.0,
             Lobe::Plastic(p) => p.delta_probability(wo),
+            Lobe::Principled(p) => p.delta_probability(wo),
             _ => 0.0,
         }
     }
 
     /// Has a lobe that is not a delta (worth sampling lights for).
     fn is_smooth_only(&self) -> bool {
+        if let Lobe::Principled(p) = self {
+            return p.is_smooth_only();
+        }
         matches!(
             self,
             Lobe::Mirror(_)
@@ -264,6 +274,22 @@ impl<'a> Bsdf<'a> {
                 }),
             };
             b.push(lobe, 1.0);
+        } else if let Some(p) = m.principled {
+            let lobe = Principled {
+                base: m.diffuse,
+                metallic: p.metallic,
+                transmission: p.transmission,
+                eta: p.ior,
+                thin: p.thin,
+                microfacet: principled::microfacets(p.roughness),
+                clearcoat: p.clearcoat,
+                coat_microfacet: principled::microfacets(p.clearcoat_roughness),
+            };
+            if !p.thin && p.transmission > 0.0 {
+                // A refracting solid tells inside from outside.
+                b.two_sided = false;
+            }
+            b.push(Lobe::Principled(lobe), 1.0);
         } else if let Some(c) = &m.coating {
             let lobe = match rough_or_smooth(c.roughness, None, m.microfacet) {
                 None => Lobe::Plastic(Plastic {
@@ -359,6 +385,29 @@ impl<'a> Bsdf<'a> {
         }
     }
 
+    /// The weight of the mirror-direction reflection of the delta lobes
+    /// from `wo` (local frame): what a ray reflected about the shading
+    /// normal carries (the Whitted integrator's reflection of metals, coats
+    /// and principled surfaces). Zero when no such lobe exists.
+    pub fn delta_reflectance(&self, wo: Vec3A) -> Vec3A {
+        let wo = if self.two_sided && wo.z < 0.0 {
+            Vec3A::new(wo.x, wo.y, -wo.z)
+        } else {
+            wo
+        };
+        if wo.z <= 0.0 {
+            return Vec3A::ZERO;
+        }
+        self.lobes().iter().fold(Vec3A::ZERO, |r, (l, _)| {
+            r + match l {
+                Lobe::SmoothConductor(c) => fresnel::conductor(wo.z, c.eta, c.k),
+                Lobe::Plastic(p) => Vec3A::splat(fresnel::dielectric(wo.z, p.eta).0),
+                Lobe::Principled(p) => p.delta_reflectance(wo),
+                _ => Vec3A::ZERO,
+            }
+        })
+    }
+
     /// Scatters nothing (a black material).
     pub fn is_black(&self) -> bool {
         self.count == 0
@@ -377,9 +426,12 @@ impl<'a> Bsdf<'a> {
     /// Has a delta lobe (mirror, smooth glass or metal, a clear coat): the
     /// path integrator's photon-mapped caustics start at such surfaces.
     pub fn has_delta_lobe(&self) -> bool {
-        self.lobes()
-            .iter()
-            .any(|(l, _)| (l.is_smooth_only() && !matches!(l, Lobe::Null(_))) || matches!(l, Lobe::Plastic(_)))
+        self.lobes().iter().any(|(l, _)| match l {
+            Lobe::Null(_) => false,
+            Lobe::Plastic(_) => true,
+            Lobe::Principled(p) => p.has_delta(),
+            _ => l.is_smooth_only(),
+        })
     }
 
     /// Mitsuba's `null` BSDF (or a blend's hole): rays pass straight through, nothing scatters.

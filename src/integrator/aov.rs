@@ -65,6 +65,16 @@ fn step(m: &Material) -> Step {
             Step::Stop(d.tint.min(Vec3A::ONE))
         };
     }
+    if let Some(p) = m.principled {
+        // The part that dominates: a sharp metal reflects, sharp glass
+        // refracts, anything else is the base colour.
+        let base = m.diffuse.min(Vec3A::ONE);
+        return match p.roughness == 0.0 {
+            true if p.metallic >= 0.5 => Step::Reflect(base),
+            true if p.transmission * (1.0 - p.metallic) >= 0.5 => Step::Refract(base, if p.thin { 1.0 } else { p.ior }),
+            _ => Step::Stop(base),
+        };
+    }
     if let Some(c) = m.conductor {
         // Reflectance at normal incidence.
         let one = Vec3A::ONE;

@@ -119,6 +119,21 @@ fn warnings_of(m: &Material, integrator: IntegratorKind, has_delta_light: bool) 
         }
         return out;
     }
+    if let Some(p) = m.principled {
+        if set(m.specular) {
+            out.push(
+                "`specular` is ignored: a principled material's highlight comes from its roughness and index".into(),
+            );
+        }
+        if whitted && p.transmission > 0.0 {
+            out.push(
+                "`principled.transmission` is ignored: the Whitted integrator lights a principled material \
+                 directly and shows its smooth reflection only"
+                    .into(),
+            );
+        }
+        return out;
+    }
     if m.coating.is_some() && set(m.specular) {
         out.push("`specular` is ignored: a coating's highlight comes from its index".into());
     }

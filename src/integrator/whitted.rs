@@ -280,7 +280,7 @@ impl<'a> Whitted<'a> {
         if let Some(d) = m.dielectric {
             return self.dielectric(ray, &si, m, d, depth, ctx);
         }
-        if m.conductor.is_some() || m.coating.is_some() {
+        if m.conductor.is_some() || m.coating.is_some() || m.principled.is_some() {
             return self.layered(ray, &si, m, depth, ctx);
         }
         let local = self.direct(ray, &si, m, Local::Surface, ctx);
@@ -514,17 +514,12 @@ impl<'a> Whitted<'a> {
     fn layered(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
         let local = self.direct(ray, si, m, Local::Bsdf(&bsdf), ctx);
-        let weight = match (m.conductor, m.coating.as_ref()) {
-            (Some(c), _) if c.roughness == 0.0 => {
-                let (_, ns) = facing(si, -ray.dir);
-                crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k)
-            }
-            (_, Some(c)) if c.roughness == 0.0 => {
-                let (_, ns) = facing(si, -ray.dir);
-                Vec3A::splat(crate::bsdf::fresnel::dielectric(-ray.dir.dot(ns), c.ior).0)
-            }
-            _ => return local,
-        };
+        let (_, ns) = facing(si, -ray.dir);
+        let wo = bsdf.frame(ns, si.dpdu).to_local(-ray.dir);
+        let weight = bsdf.delta_reflectance(wo);
+        if weight == Vec3A::ZERO {
+            return local;
+        }
         if !self.can_bounce(depth) {
             return local;
         }

@@ -235,6 +235,13 @@ fn kind_text(m: &crate::scene::Material) -> String {
     if let Some(c) = m.coating.as_ref().filter(|c| c.roughness > 0.0 || c.nonlinear) {
         text += &format!(" coating roughness {:?} nonlinear {}", c.roughness, c.nonlinear);
     }
+    if let Some(p) = m.principled {
+        text += &format!(
+            " principled metallic {:?} roughness {:?} ior {:?} transmission {:?} thin {} clearcoat {:?} \
+             clearcoat_roughness {:?}",
+            p.metallic, p.roughness, p.ior, p.transmission, p.thin, p.clearcoat, p.clearcoat_roughness
+        );
+    }
     if let Some(b) = m.blend.as_deref() {
         let side = |s: &Option<crate::scene::Material>| match s {
             None => "hole".to_string(),
@@ -673,6 +680,12 @@ mod tests {
         let thin = fingerprint(&s, AccelKind::KdTree, "");
         assert_ne!(base, thin);
         assert_ne!(null, thin);
+        s.materials[0].dielectric = None;
+        s.materials[0].principled = Some(crate::scene::Principled::default());
+        let principled = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, principled);
+        s.materials[0].principled.as_mut().unwrap().clearcoat = 0.5;
+        assert_ne!(principled, fingerprint(&s, AccelKind::KdTree, ""));
         let mut s = scene();
         s.media.list.push(crate::scene::HomogeneousMedium {
             name: "fog".into(),

@@ -339,6 +339,8 @@ pub struct MaterialDesc {
     pub conductor: Option<Spanned<ConductorDesc>>,
     /// `[materials.NAME.coating]`.
     pub coating: Option<Spanned<CoatingDesc>>,
+    /// `[materials.NAME.principled]`.
+    pub principled: Option<Spanned<PrincipledDesc>>,
     /// `[materials.NAME.blend]`.
     pub blend: Option<Spanned<BlendDesc>>,
     /// Emitted radiance: a colour, a number or a texture.
@@ -430,6 +432,27 @@ pub struct CoatingDesc {
     pub roughness: Option<Spanned<f64>>,
     /// The base's colour tints every inter-reflection under the coating.
     pub nonlinear: Option<bool>,
+}
+
+/// `[materials.NAME.principled]`: glTF's metallic-roughness model, with
+/// the material's `diffuse` as its base colour.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrincipledDesc {
+    /// Metalness in [0, 1]: a number or a scalar texture.
+    pub metallic: Option<Spanned<ParamDesc>>,
+    /// Perceptual roughness in [0, 1] (`alpha` is its square).
+    pub roughness: Option<Spanned<ParamDesc>>,
+    /// Index of refraction of the dielectric part.
+    pub ior: Option<Spanned<f64>>,
+    /// Transmitted fraction of the dielectric base, in [0, 1].
+    pub transmission: Option<Spanned<ParamDesc>>,
+    /// Transmission through a thin wall (no bending) rather than into a solid.
+    pub thin: Option<Spanned<bool>>,
+    /// Strength of the clear coat, in [0, 1].
+    pub clearcoat: Option<Spanned<ParamDesc>>,
+    /// Perceptual roughness of the clear coat, in [0, 1].
+    pub clearcoat_roughness: Option<Spanned<ParamDesc>>,
 }
 
 /// `[[lights]]`: the keys of every light type (the loader checks which

@@ -629,7 +629,15 @@ impl Material {
             Some(Texture::Constant(c)) => c.x <= 0.0,
             Some(_) => true,
         };
-        self.dielectric.is_some()
+        let principled_casts = self.principled.is_some_and(|p| {
+            let may_be_above_zero =
+                |tex: &Option<Texture>, value: f32| value > 0.0 || tex.as_ref().is_some_and(|t| t.max_value().x > 0.0);
+            smooth_somewhere(&t.principled_roughness, p.roughness)
+                && (may_be_above_zero(&t.principled_metallic, p.metallic)
+                    || may_be_above_zero(&t.principled_transmission, p.transmission))
+        });
+        principled_casts
+            || self.dielectric.is_some()
             || self.mirror.is_some_and(|m| {
                 m.reflectivity > 0.0 || t.mirror_reflectivity.as_ref().is_some_and(|r| r.max_value().x > 0.0)
             })
@@ -644,7 +652,21 @@ impl Material {
         if let Some(b) = self.blend.as_deref() {
             return b.first.is_none() || b.second.is_none() || b.sides().any(Material::spawns_secondary);
         }
-        self.is_specular() || self.coating.as_ref().is_some_and(|c| c.roughness == 0.0)
+        let principled_smooth = self.principled.is_some_and(|p| {
+            let t = self.textures.as_deref();
+            let smooth = |tex: Option<&Texture>, value: f32| match tex {
+                None => value == 0.0,
+                Some(Texture::Constant(c)) => c.x <= 0.0,
+                Some(_) => true,
+            };
+            smooth(t.and_then(|t| t.principled_roughness.as_ref()), p.roughness)
+                || (p.clearcoat > 0.0
+                    && smooth(
+                        t.and_then(|t| t.principled_clearcoat_roughness.as_ref()),
+                        p.clearcoat_roughness,
+                    ))
+        });
+        self.is_specular() || principled_smooth || self.coating.as_ref().is_some_and(|c| c.roughness == 0.0)
     }
 
     /// True when the surface has a diffuse part that receives direct light
@@ -662,7 +684,17 @@ impl Material {
             Some(Texture::Constant(c)) => c.x,
             Some(_) => 0.0,
         };
-        self.dielectric.is_none()
+        let below_one = |tex: Option<&Texture>, value: f32| match tex {
+            None => value < 1.0,
+            Some(Texture::Constant(c)) => c.x < 1.0,
+            Some(_) => true,
+        };
+        let principled_diffuse = self.principled.is_none_or(|p| {
+            below_one(t.and_then(|t| t.principled_metallic.as_ref()), p.metallic)
+                && below_one(t.and_then(|t| t.principled_transmission.as_ref()), p.transmission)
+        });
+        principled_diffuse
+            && self.dielectric.is_none()
             && self.conductor.is_none()
             && diffuse.max_element() > 0.0
             && (self.mirror.is_none() || reflectivity_min < 1.0)

@@ -9,7 +9,8 @@ use crate::scene::desc::{FresnelName, MaterialDesc, ModelName, ParamDesc, Spanne
 use crate::scene::material::{AlphaMask, MaterialTextures, NormalMap};
 use crate::scene::metals;
 use crate::scene::{
-    Blend, Coating, Conductor, Dielectric, FresnelModel, Material, MicrofacetDistribution, Mirror, ShadingModel,
+    Blend, Coating, Conductor, Dielectric, FresnelModel, Material, MicrofacetDistribution, Mirror, Principled,
+    ShadingModel,
 };
 use crate::texture::Texture;
 use std::collections::BTreeMap;
@@ -288,6 +289,62 @@ impl Ctx<'_> {
                 })
             }
         };
+        let principled = match &m.principled {
+            None => None,
+            Some(s) => {
+                self.exclusive(
+                    name,
+                    "principled",
+                    s.span(),
+                    &[
+                        ("mirror", m.mirror.is_some()),
+                        ("dielectric", m.dielectric.is_some()),
+                        ("conductor", m.conductor.is_some()),
+                        ("coating", m.coating.is_some()),
+                    ],
+                )?;
+                let p = s.get_ref();
+                let unit = ("in [0, 1]", (|x| (0.0..=1.0).contains(&x)) as fn(f32) -> bool);
+                let (metallic, metallic_tex) = self.scalar_param(&p.metallic, "metallic", 0.0, unit)?;
+                let (roughness, roughness_tex) = self.scalar_param(&p.roughness, "roughness", 0.5, unit)?;
+                let (transmission, transmission_tex) = self.scalar_param(&p.transmission, "transmission", 0.0, unit)?;
+                let (clearcoat, clearcoat_tex) = self.scalar_param(&p.clearcoat, "clearcoat", 0.0, unit)?;
+                let (clearcoat_roughness, clearcoat_roughness_tex) =
+                    self.scalar_param(&p.clearcoat_roughness, "clearcoat_roughness", 0.0, unit)?;
+                let ior = match &p.ior {
+                    None => DEFAULT_IOR,
+                    Some(r) => {
+                        let x = self.number(r, "ior")?;
+                        if !(1.0..=10.0).contains(&x) {
+                            return Err(self.invalid(r.span(), format!("principled `ior` = {x} must be in [1, 10]")));
+                        }
+                        x
+                    }
+                };
+                (
+                    textures.principled_metallic,
+                    textures.principled_roughness,
+                    textures.principled_transmission,
+                    textures.principled_clearcoat,
+                    textures.principled_clearcoat_roughness,
+                ) = (
+                    metallic_tex,
+                    roughness_tex,
+                    transmission_tex,
+                    clearcoat_tex,
+                    clearcoat_roughness_tex,
+                );
+                Some(Principled {
+                    metallic,
+                    roughness,
+                    ior,
+                    transmission,
+                    thin: p.thin.as_ref().is_none_or(|t| *t.get_ref()),
+                    clearcoat,
+                    clearcoat_roughness,
+                })
+            }
+        };
         let (emission, emission_tex) = self.colour_param(&m.emission, "emission", Vec3A::ZERO, None)?;
         let strength = match &m.emission_strength {
             None => 1.0,
@@ -382,7 +439,7 @@ impl Ctx<'_> {
             microfacet,
             roughness_v,
             null: false,
-            principled: None,
+            principled,
             blend: None,
         })
     }
