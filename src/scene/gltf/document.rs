@@ -106,11 +106,35 @@ pub(super) fn read(path: &Path, options: &GltfOptions) -> Result<File, SceneErro
 /// against what caustic implements.
 fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), SceneError> {
     use gltf::json::validation::Validate;
+    // gltf-json's check of POSITION's bounds indexes the accessors with the
+    // attribute's index unchecked: every POSITION index is checked first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&position) {
+                if i.value() >= root.accessors.len() {
+                    return Err(error(
+                        path,
+                        format!("/meshes/{m}/primitives/{p}/attributes/POSITION"),
+                        format!(
+                            "accessor {} out of range ({} accessors)",
+                            i.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |p, e| errors.push((p(), e)));
-    let first = errors
-        .into_iter()
-        .find(|(p, _)| !p.as_str().starts_with("extensionsRequired"));
+    // POSITION's `min` and `max` are required by the specification but
+    // unused here (caustic computes bounds); files without them render.
+    let first = errors.into_iter().find(|(p, _)| {
+        let p = p.as_str();
+        !p.starts_with("extensionsRequired")
+            && !(p.contains("attributes[\"POSITION\"]") && (p.ends_with(".min") || p.ends_with(".max")))
+    });
     match first {
         None => Ok(()),
         Some((p, e)) => {

@@ -46,6 +46,17 @@ pub(super) fn primitive(
         Mode::Triangles => index_count / 3,
         _ => index_count.saturating_sub(2),
     };
+    let max_elements = crate::io::LoadLimits::default().max_elements;
+    if vertices as u64 > max_elements || index_count as u64 > max_elements {
+        let (accessor, count) = match prim.indices() {
+            Some(a) if a.count() as u64 > max_elements => (a.index(), a.count()),
+            _ => (positions_accessor.index(), vertices),
+        };
+        return Err(ctx.error(
+            format!("/accessors/{accessor}/count"),
+            format!("{count} elements: more than the limit of {max_elements}"),
+        ));
+    }
     // Before reading anything: the mesh must fit the memory budget.
     if let Some(budget) = crate::io::LoadLimits::default().memory {
         let need = crate::io::mesh_memory_bytes(vertices as u64, triangles_announced as u64);
