@@ -117,6 +117,13 @@ impl EditableScene {
                 message: "the viewer opens caustic TOML scenes; render a Mitsuba scene with `caustic render`".into(),
             });
         }
+        if scene::gltf::is_gltf_path(path) {
+            return Err(SceneError::Gltf {
+                path: path.to_path_buf(),
+                pointer: String::new(),
+                message: "the viewer opens caustic TOML scenes; render a glTF model with `caustic render`".into(),
+            });
+        }
         // The loader checks size, encoding and every value first.
         let scene = scene::load_scene(path)?;
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
