@@ -134,7 +134,7 @@ impl Overrides {
             None => 1.0,
         };
         if let Some(path) = &self.environment {
-            let image = crate::io::image::load_image(path, crate::texture::ColourSpace::Linear)
+            let image = crate::io::image::load_image(path, crate::texture::ColourSpace::Srgb)
                 .map_err(|e| JobError::Invalid(format!("--environment: {e}")))?;
             let map = std::sync::Arc::new(EnvironmentMap::new(std::sync::Arc::new(image), rotation));
             scene.lights.retain(|l| !matches!(l, Light::Environment { .. }));
@@ -144,19 +144,21 @@ impl Overrides {
             });
             return Ok(());
         }
-        let Some(Light::Environment { radiance, map }) =
-            scene.lights.iter_mut().find(|l| matches!(l, Light::Environment { .. }))
-        else {
+        let mut found = false;
+        for light in &mut scene.lights {
+            if let Light::Environment { radiance, map } = light {
+                found = true;
+                *radiance *= scale;
+                if let (Some(m), Some(_)) = (map.as_mut(), self.environment_rotation) {
+                    *m = std::sync::Arc::new(EnvironmentMap::new(m.image.clone(), rotation * m.to_world));
+                }
+            }
+        }
+        if !found {
             return Err(JobError::Invalid(format!(
                 "{}: --environment-intensity and --environment-rotation need an environment light (the scene has none; give one with --environment)",
                 source.display()
             )));
-        };
-        *radiance *= scale;
-        if let Some(m) = map {
-            if self.environment_rotation.is_some() {
-                *m = std::sync::Arc::new(EnvironmentMap::new(m.image.clone(), rotation * m.to_world));
-            }
         }
         Ok(())
     }
