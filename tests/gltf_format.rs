@@ -330,3 +330,30 @@ fn a_base_colour_texture_appears_in_its_corners() {
         dim.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / px.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
     assert!((ratio - 0.5).abs() < 0.02, "{ratio}");
 }
+
+#[test]
+fn an_environment_image_replaces_the_default_environment() {
+    // A uniform grey image (sRGB 128: linear 0.2158) lights the quad 0.2158
+    // times as brightly as the default environment of radiance 1, whatever
+    // its rotation.
+    let dir = tempfile::tempdir().unwrap();
+    let env = dir.path().join("grey.png");
+    image::RgbImage::from_pixel(8, 4, image::Rgb([128, 128, 128]))
+        .save(&env)
+        .unwrap();
+    let size = 16;
+    let sum = |px: &[[f32; 3]]| px.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
+    let default = sum(&render_exr("tests/data/gltf/textured_quad.gltf", size, &[]));
+    let env_arg = env.to_str().unwrap();
+    let grey = sum(&render_exr(
+        "tests/data/gltf/textured_quad.gltf",
+        size,
+        &["--environment", env_arg, "--environment-rotation", "-90"],
+    ));
+    let expected = caustic::texture::image::srgb_to_linear(128.0 / 255.0);
+    assert!(
+        (grey / default - expected).abs() < 0.01,
+        "{} ≠ {expected}",
+        grey / default
+    );
+}

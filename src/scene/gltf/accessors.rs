@@ -164,16 +164,18 @@ impl<'a> Ctx<'a> {
         })
     }
 
-    /// The values of `accessor` as `f64`, `N` per element, after checking its
-    /// type against `allowed` (component type, normalized). `pointer` is
-    /// where the accessor is used, for messages.
-    fn values<const N: usize>(
+    /// The values of `accessor`, `N` per element, each converted by `conv`
+    /// from `f64` (exact for every component type), after checking its type
+    /// against `allowed` (component type, normalized). `pointer` is where
+    /// the accessor is used, for messages.
+    fn values<const N: usize, T: Copy + Default>(
         &self,
         accessor: &gltf::Accessor,
         pointer: &str,
         what: &str,
         allowed: &[(DataType, bool)],
-    ) -> Result<Vec<[f64; N]>, SceneError> {
+        conv: fn(f64) -> T,
+    ) -> Result<Vec<[T; N]>, SceneError> {
         let at = format!("/accessors/{}", accessor.index());
         let used = format!("{pointer} (accessor {})", accessor.index());
         let n = dimension_count(accessor.dimensions());
@@ -212,7 +214,7 @@ impl<'a> Ctx<'a> {
             Some(view) => {
                 let layout = self.layout(&view, accessor.offset(), count, component, N, &used)?;
                 (0..count)
-                    .map(|i| std::array::from_fn(|c| layout.get(i, c, normalized)))
+                    .map(|i| std::array::from_fn(|c| conv(layout.get(i, c, normalized))))
                     .collect::<Vec<_>>()
             }
             // Without a view the elements are zeros (§3.6.2.3), replaced by sparse values.
@@ -220,7 +222,7 @@ impl<'a> Ctx<'a> {
                 if accessor.sparse().is_none() {
                     return Err(self.error(&at, "an accessor without a bufferView or sparse values"));
                 }
-                vec![[0.0; N]; count]
+                vec![[T::default(); N]; count]
             }
         };
         if let Some(sparse) = accessor.sparse() {
@@ -260,7 +262,7 @@ impl<'a> Ctx<'a> {
                         format!("sparse index {i} of entry {j} is out of range ({count} elements)"),
                     ));
                 }
-                out[i] = std::array::from_fn(|c| vl.get(j, c, normalized));
+                out[i] = std::array::from_fn(|c| conv(vl.get(j, c, normalized)));
             }
         }
         Ok(out)
@@ -274,19 +276,14 @@ impl<'a> Ctx<'a> {
         what: &str,
         allowed: &[(DataType, bool)],
     ) -> Result<Vec<[f32; N]>, SceneError> {
-        let values = self.values::<N>(accessor, pointer, what, allowed)?;
-        let mut out = Vec::with_capacity(values.len());
-        for (i, v) in values.iter().enumerate() {
-            let f: [f32; N] = std::array::from_fn(|c| v[c] as f32);
-            if f.iter().any(|x| !x.is_finite()) {
-                return Err(self.error(
-                    pointer,
-                    format!("{what}: element {i} of accessor {} is not finite", accessor.index()),
-                ));
-            }
-            out.push(f);
+        let values = self.values::<N, f32>(accessor, pointer, what, allowed, |x| x as f32)?;
+        if let Some(i) = values.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err(self.error(
+                pointer,
+                format!("{what}: element {i} of accessor {} is not finite", accessor.index()),
+            ));
         }
-        Ok(out)
+        Ok(values)
     }
 
     /// Vertex indices (`UNSIGNED_BYTE`, `_SHORT` or `_INT` scalars), each
@@ -298,21 +295,18 @@ impl<'a> Ctx<'a> {
         vertices: usize,
     ) -> Result<Vec<u32>, SceneError> {
         let allowed = [(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
-        let values = self.values::<1>(accessor, pointer, "indices", &allowed)?;
-        let mut out = Vec::with_capacity(values.len());
-        for (i, v) in values.iter().enumerate() {
-            let index = v[0] as u64;
-            if index >= vertices as u64 {
-                return Err(self.error(
-                    pointer,
-                    format!(
-                        "index {i} of accessor {} is {index}, but the primitive has {vertices} vertices",
-                        accessor.index()
-                    ),
-                ));
-            }
-            out.push(index as u32);
+        // Unsigned integers of at most 32 bits: exact as f64 and as u32.
+        let values = self.values::<1, u32>(accessor, pointer, "indices", &allowed, |x| x as u32)?;
+        if let Some(i) = values.iter().position(|v| v[0] as usize >= vertices) {
+            return Err(self.error(
+                pointer,
+                format!(
+                    "index {i} of accessor {} is {}, but the primitive has {vertices} vertices",
+                    accessor.index(),
+                    values[i][0]
+                ),
+            ));
         }
-        Ok(out)
+        Ok(values.into_iter().map(|v| v[0]).collect())
     }
 }

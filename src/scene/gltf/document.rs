@@ -7,6 +7,7 @@ use crate::io::LoadLimits;
 use crate::scene::load::SceneError;
 use base64::Engine;
 use std::io::Read;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// A read and validated model with its buffers.
@@ -56,8 +57,17 @@ pub(super) fn read(path: &Path, options: &GltfOptions) -> Result<File, SceneErro
         error,
     })?;
     let (json, blob) = if bytes.starts_with(GLB_MAGIC) {
-        let (json, blob) = split_glb(path, &bytes)?;
-        (json.to_vec(), blob.map(<[u8]>::to_vec))
+        let (json, bin) = split_glb(path, &bytes)?;
+        let json = bytes[json].to_vec();
+        // The binary chunk keeps the file's allocation (no copy of the
+        // largest part of the file).
+        let blob = bin.map(|r| {
+            let mut bytes = bytes;
+            bytes.truncate(r.end);
+            bytes.drain(..r.start);
+            bytes
+        });
+        (json, blob)
     } else {
         (bytes, None)
     };
@@ -149,9 +159,9 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), SceneError> {
     }
 }
 
-/// The JSON chunk and the optional binary chunk of a GLB file (glTF 2.0
-/// §4.4), every length checked against the file.
-fn split_glb<'b>(path: &Path, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]>), SceneError> {
+/// The byte ranges of the JSON chunk and the optional binary chunk of a
+/// GLB file (glTF 2.0 §4.4), every length checked against the file.
+fn split_glb(path: &Path, bytes: &[u8]) -> Result<(Range<usize>, Option<Range<usize>>), SceneError> {
     let word = |at: usize| -> Option<u32> {
         bytes
             .get(at..at + 4)
@@ -190,10 +200,9 @@ fn split_glb<'b>(path: &Path, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [
                     bytes.len().saturating_sub(start)
                 ))
             })?;
-        let data = &bytes[start..end];
         match chunk_type {
-            CHUNK_JSON if json.is_none() && at == 12 => json = Some(data),
-            CHUNK_BIN if json.is_some() && bin.is_none() => bin = Some(data),
+            CHUNK_JSON if json.is_none() && at == 12 => json = Some(start..end),
+            CHUNK_BIN if json.is_some() && bin.is_none() => bin = Some(start..end),
             CHUNK_JSON | CHUNK_BIN => {
                 return Err(error(
                     path,
@@ -395,7 +404,7 @@ mod tests {
             glb.push(b' ');
         }
         let (j, b) = split_glb(p, &glb).unwrap();
-        assert_eq!(j, json);
+        assert_eq!(&glb[j], json);
         assert!(b.is_none());
         let cut = &glb[..glb.len() - 3];
         let e = split_glb(p, cut).unwrap_err().to_string();
