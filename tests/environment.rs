@@ -174,3 +174,68 @@ fn environment_keys_are_read_and_checked() {
         .to_string();
     assert!(e.contains("`u` does not apply"), "{e}");
 }
+
+/// Photons from an environment carry its light into the scene: the power of
+/// those whose first ray crosses a sphere of radius `a` is what the sphere
+/// receives, `π a² ∫ L dω` (a convex body's cross-section is `π a²` from
+/// every direction), for a constant sky and for an image.
+#[test]
+fn environment_photons_carry_the_light_a_sphere_receives() {
+    use caustic::integrator::photon::{PhotonRules, PhotonTracer};
+    let a = 0.7f32;
+    let mut scene: Scene = parse_scene(
+        "[render]\nintegrator = \"path\"\nseed = 9\n\
+         [camera]\nposition = [0.0, 0.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+         [materials.glass]\ndielectric = { ior = 1.5 }\n[materials.floor]\ndiffuse = 0.5\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.7\nmaterial = \"glass\"\n\
+         [[objects]]\ntype = \"quad\"\ncenter = [0.0, -2.0, 0.0]\nsize = [6.0, 6.0]\nnormal = [0.0, 1.0, 0.0]\nmaterial = \"floor\"\n",
+        std::path::Path::new("sky.toml"),
+    )
+    .unwrap();
+    // A bright band above the horizon on a dim sky.
+    let band = Arc::new(EnvironmentMap::new(
+        image(32, 16, |_, y| if (4..6).contains(&y) { 20.0 } else { 0.2 }),
+        Mat3A::IDENTITY,
+    ));
+    let n = 400;
+    let band_integral =
+        (sphere_directions(n).map(|d| f64::from(band.eval(d).x)).sum::<f64>() * 4.0 * std::f64::consts::PI
+            / (n * n) as f64) as f32;
+    for (light, integral) in [
+        (
+            Light::Environment {
+                radiance: Vec3A::splat(0.5),
+                map: None,
+            },
+            0.5 * 4.0 * PI,
+        ),
+        (
+            Light::Environment {
+                radiance: Vec3A::ONE,
+                map: Some(band.clone()),
+            },
+            band_integral,
+        ),
+    ] {
+        scene.lights = vec![light];
+        let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+        let count = 400_000u64;
+        let tracer = PhotonTracer::with_rules(&scene, accel.as_ref(), count, PhotonRules::Physical);
+        assert!(tracer.has_emitters());
+        let mut received = 0.0f64;
+        for i in 0..count {
+            let Some(path) = tracer.emit(i) else { continue };
+            let (o, d) = (path.ray().origin, path.ray().dir);
+            // The ray's closest approach to the centre.
+            let t = -o.dot(d);
+            if t > 0.0 && (o + d * t).length() < a {
+                received += f64::from(path.power().x);
+            }
+        }
+        let expected = f64::from(PI * a * a * integral);
+        assert!(
+            (received / expected - 1.0).abs() < 0.02,
+            "{received} against {expected}"
+        );
+    }
+}

@@ -336,6 +336,17 @@ fn layered_and_mixed_materials_agree_with_mitsuba() {
     assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
 }
 
+/// Bump maps (tests/data/mitsuba/bump.xml: a bumped rough plastic floor
+/// and a bumped diffuse wall, the height a raw bitmap, one scale negative)
+/// against Mitsuba's render: the bilinear gradient, its scale and the
+/// tilted normal as Mitsuba's `bumpmap` computes them.
+#[test]
+fn bump_maps_agree_with_mitsuba() {
+    let (ratio, relmse) = against_mitsuba("bump");
+    assert!((ratio - Vec3A::ONE).abs().max_element() < 0.01, "mean ratio {ratio}");
+    assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
+}
+
 /// The room's relMSE at 1024 spp against the reference is 2.9e-4, about the
 /// noise's; a wrong orientation, filter or spectrum gives many times it.
 const RELMSE_BOUND: f32 = 2e-3;

@@ -367,6 +367,7 @@ fn documentation_covers_every_key() {
         format!("{cam}[materials.m.principled]\nzzz = 1\n"),
         format!("{cam}[[lights]]\nzzz = 1\n"),
         format!("{cam}[[objects]]\nzzz = 1\n"),
+        format!("{cam}[media.m]\nzzz = 1\n"),
         "zzz = 1\n".to_string(),
     ];
     let mut checked = 0;

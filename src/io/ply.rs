@@ -643,6 +643,57 @@ pub(crate) fn parse(src: &mut Source, limits: &LoadLimits, name: String) -> Resu
     })
 }
 
+/// Writes `mesh` as a binary little-endian PLY: positions, normals unless
+/// they are the ones the reader computes from the triangles (given normals
+/// are normalised again on reading), texture coordinates when present, and
+/// the triangles. Read back with [`parse`], the mesh is the same, tangents
+/// aside (PLY holds none).
+pub fn write_binary(w: &mut impl std::io::Write, mesh: &Mesh) -> std::io::Result<()> {
+    let computed = Mesh::new("", mesh.positions.clone(), mesh.triangles.clone(), None)
+        .map(|m| m.normals == mesh.normals)
+        .unwrap_or(false);
+    let normals = !computed;
+    let uvs = !mesh.uvs.is_empty();
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by caustic\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n",
+        mesh.positions.len()
+    );
+    if normals {
+        header += "property float nx\nproperty float ny\nproperty float nz\n";
+    }
+    if uvs {
+        header += "property float u\nproperty float v\n";
+    }
+    header += &format!(
+        "element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
+        mesh.triangles.len()
+    );
+    w.write_all(header.as_bytes())?;
+    let mut record = Vec::with_capacity(32);
+    for (i, p) in mesh.positions.iter().enumerate() {
+        record.clear();
+        let mut put = |x: f32| record.extend_from_slice(&x.to_le_bytes());
+        p.to_array().into_iter().for_each(&mut put);
+        if normals {
+            mesh.normals[i].to_array().into_iter().for_each(&mut put);
+        }
+        if uvs {
+            mesh.uvs[i].to_array().into_iter().for_each(&mut put);
+        }
+        w.write_all(&record)?;
+    }
+    for t in &mesh.triangles {
+        record.clear();
+        record.push(3u8);
+        for i in t {
+            record.extend_from_slice(&i.to_le_bytes());
+        }
+        w.write_all(&record)?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -786,5 +837,38 @@ mod tests {
         let cut = &bytes[..bytes.len() - 40];
         let e = load_bytes("t.ply", cut).unwrap_err();
         assert!(e.message.contains("bytes follow the header"), "{e}");
+    }
+
+    #[test]
+    fn written_meshes_read_back_the_same() {
+        let positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.1),
+            Vec3::new(0.0, 1.0, 0.3),
+            Vec3::new(1.0, 1.0, 0.0),
+        ];
+        let triangles = vec![[0, 1, 2], [2, 1, 3]];
+        let computed = Mesh::new("m", positions.clone(), triangles.clone(), None).unwrap();
+        let given = Mesh::new("m", positions, triangles, Some(vec![Vec3::Z; 4]))
+            .unwrap()
+            .with_uvs(vec![
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 1.0),
+                Vec2::new(0.25, 0.5),
+            ])
+            .unwrap();
+        for mesh in [computed, given] {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("m.ply");
+            let mut bytes = Vec::new();
+            write_binary(&mut bytes, &mesh).unwrap();
+            std::fs::write(&path, bytes).unwrap();
+            let again = load_mesh(&path).unwrap();
+            assert_eq!(again.positions, mesh.positions);
+            assert_eq!(again.normals, mesh.normals);
+            assert_eq!(again.triangles, mesh.triangles);
+            assert_eq!(again.uvs, mesh.uvs);
+        }
     }
 }

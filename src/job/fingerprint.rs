@@ -159,6 +159,9 @@ fn fingerprint_of(
             if let Some(n) = &t.normal_map {
                 text += &format!(" normal scale {:?}", n.scale);
             }
+            if let Some(b) = &t.bump_map {
+                text += &format!(" bump scale {:?}", b.scale);
+            }
             if let Some(a) = &t.alpha {
                 text += &format!(" alpha cutoff {:?}", a.cutoff);
             }

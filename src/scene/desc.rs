@@ -28,7 +28,7 @@ pub struct SceneDesc {
     #[serde(default)]
     pub render: RenderDesc,
     /// `[camera]` (required).
-    pub camera: CameraDesc,
+    pub camera: Spanned<CameraDesc>,
     /// `[textures.NAME]`.
     #[serde(default)]
     pub textures: BTreeMap<String, Spanned<TextureDesc>>,
@@ -46,6 +46,65 @@ pub struct SceneDesc {
     pub photons: PhotonsDesc,
     /// `[medium]`: fog inside the water.
     pub medium: Option<Spanned<MediumDesc>>,
+    /// `[media.NAME]`: homogeneous participating media bounded by objects
+    /// (`interior` / `exterior`) or around the camera (`medium`).
+    #[serde(default)]
+    pub media: BTreeMap<String, Spanned<MediaDesc>>,
+}
+
+/// `[media.NAME]`: a homogeneous medium.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediaDesc {
+    /// Extinction coefficient per unit length: a number or `[r, g, b]`.
+    pub sigma_t: Option<Spanned<ScaleDesc>>,
+    /// Single-scattering albedo in [0, 1]: a number or `[r, g, b]`.
+    pub albedo: Option<Spanned<ScaleDesc>>,
+    /// Multiplies `sigma_t`.
+    pub scale: Option<Spanned<f64>>,
+    /// `"isotropic"` or `{ hg = g }`.
+    pub phase: Option<Spanned<PhaseDesc>>,
+    /// Scattering vertices sample a light (next-event estimation).
+    pub sample_emitters: Option<Spanned<bool>>,
+}
+
+/// A medium's phase function: a name (`"isotropic"`) or a table naming
+/// the Henyey–Greenstein asymmetry (`{ hg = 0.5 }`).
+#[derive(Debug)]
+pub enum PhaseDesc {
+    /// A phase function by name.
+    Name(String),
+    /// `{ hg = g }`.
+    Hg(HgDesc),
+}
+
+/// `{ hg = g }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HgDesc {
+    /// Henyey–Greenstein asymmetry, in (−1, 1).
+    pub hg: f64,
+}
+
+struct PhaseVisitor;
+
+impl<'de> Visitor<'de> for PhaseVisitor {
+    type Value = PhaseDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("\"isotropic\" or a table { hg = g }")
+    }
+    fn visit_str<E: de::Error>(self, s: &str) -> Result<PhaseDesc, E> {
+        Ok(PhaseDesc::Name(s.to_string()))
+    }
+    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<PhaseDesc, A::Error> {
+        HgDesc::deserialize(de::value::MapAccessDeserializer::new(map)).map(PhaseDesc::Hg)
+    }
+}
+
+impl<'de> Deserialize<'de> for PhaseDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(PhaseVisitor)
+    }
 }
 
 /// `[photons]`.
@@ -277,6 +336,9 @@ pub enum IntegratorName {
     Whitted,
     /// `"path"`.
     Path,
+    /// `"volpath"`: path tracing through the `[media]`; rays and shadow
+    /// rays pass through `null` surfaces without a bounce.
+    Volpath,
 }
 
 /// `[camera]`.
@@ -285,8 +347,12 @@ pub enum IntegratorName {
 pub struct CameraDesc {
     /// Eye position.
     pub position: Spanned<Vec3Desc>,
-    /// Point looked at.
-    pub look_at: Spanned<Vec3Desc>,
+    /// Point looked at (or give the exact frame: `forward`, `right`, `up`).
+    pub look_at: Option<Spanned<Vec3Desc>>,
+    /// Instead of `look_at`: the unit viewing direction, taken as written.
+    pub forward: Option<Spanned<Vec3Desc>>,
+    /// With `forward`: the unit image right vector, taken as written.
+    pub right: Option<Spanned<Vec3Desc>>,
     /// Up direction (need not be orthogonal to the view).
     pub up: Option<Spanned<Vec3Desc>>,
     /// Vertical field of view in degrees.
@@ -307,6 +373,8 @@ pub struct CameraDesc {
     pub filter_radius: Option<Spanned<f64>>,
     /// Standard deviation of a Gaussian filter in pixels.
     pub filter_stddev: Option<Spanned<f64>>,
+    /// The `[media]` entry the camera is inside.
+    pub medium: Option<Spanned<String>>,
 }
 
 /// `[materials.NAME]`.
@@ -327,6 +395,10 @@ pub struct MaterialDesc {
     pub normal_map: Option<Spanned<ParamDesc>>,
     /// Scale of the normal map's x and y.
     pub normal_scale: Option<Spanned<f64>>,
+    /// A bump map: a scalar height texture.
+    pub bump_map: Option<Spanned<ParamDesc>>,
+    /// Multiplies the bump map's gradient.
+    pub bump_scale: Option<Spanned<f64>>,
     /// Alpha cutout mask (a scalar texture).
     pub alpha: Option<Spanned<ParamDesc>>,
     /// Mask values below it are holes.
@@ -351,6 +423,8 @@ pub struct MaterialDesc {
     pub one_sided: Option<Spanned<bool>>,
     /// Microfacet distribution of the rough lobes: "ggx" or "beckmann".
     pub microfacet: Option<Spanned<String>>,
+    /// Scatters nothing: rays pass straight through (a medium's boundary).
+    pub null: Option<Spanned<bool>>,
 }
 
 /// `[materials.NAME.mirror]`.
@@ -511,13 +585,14 @@ pub struct ObjectDesc {
     pub p0: Option<Spanned<Vec3Desc>>,
     /// Cylinder: centre of the end where `v = 1`.
     pub p1: Option<Spanned<Vec3Desc>>,
-    /// Cylinder: the normals point toward the axis (Mitsuba's `flip_normals`).
+    /// Cylinder: the normals point toward the axis (Mitsuba's `flip_normals`);
+    /// disk given by `u` and `v`: it faces `−(u × v)`.
     pub flip_normals: Option<Spanned<bool>>,
     /// Quad corner (with `u` and `v`).
     pub corner: Option<Spanned<Vec3Desc>>,
-    /// Quad first edge.
+    /// Quad first edge, or a disk's first semi-axis (the image of its local x).
     pub u: Option<Spanned<Vec3Desc>>,
-    /// Quad second edge.
+    /// Quad second edge, or a disk's second semi-axis (the image of its local y).
     pub v: Option<Spanned<Vec3Desc>>,
     /// Quad `[width, height]` (with `center`), or water extent `[x, z]`.
     pub size: Option<Spanned<Vec2Desc>>,
@@ -532,6 +607,9 @@ pub struct ObjectDesc {
     pub file: Option<Spanned<String>>,
     /// Mesh translation.
     pub translate: Option<Spanned<Vec3Desc>>,
+    /// Mesh object-to-world affine matrix, three rows of four numbers
+    /// (instead of `translate`, `rotate`, `scale`).
+    pub matrix: Option<Spanned<MatrixDesc>>,
     /// Mesh scale: one number or `[x, y, z]`.
     pub scale: Option<Spanned<ScaleDesc>>,
     /// Mesh smooth shading.
@@ -540,6 +618,10 @@ pub struct ObjectDesc {
     pub waves: Option<Spanned<Vec<WaveDesc>>>,
     /// Water: grid cells `[along x, along z]`.
     pub resolution: Option<Spanned<Vec2Desc>>,
+    /// The `[media]` entry inside the object (against its normals).
+    pub interior: Option<Spanned<String>>,
+    /// The `[media]` entry outside the object (where its normals point).
+    pub exterior: Option<Spanned<String>>,
 }
 
 /// `[textures.NAME]`, or a texture written inline as a parameter's value:
@@ -623,6 +705,20 @@ pub enum ParamDesc {
 /// checked by the loader).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vec3Desc(pub [f64; 3]);
+
+/// Three rows of four numbers: an affine matrix `[linear | translation]`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct MatrixDesc(pub [Vec4Desc; 3]);
+
+/// An array of exactly four numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vec4Desc(pub [f64; 4]);
+
+impl<'de> Deserialize<'de> for Vec4Desc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_seq(NumbersVisitor::<4>).map(Vec4Desc)
+    }
+}
 
 /// An array of exactly two numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]

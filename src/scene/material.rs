@@ -317,6 +317,16 @@ pub struct NormalMap {
     pub scale: f32,
 }
 
+/// A bump map (Mitsuba's `bumpmap`): a scalar height texture whose
+/// gradient in texture space, times `scale`, tilts the shading normal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BumpMap {
+    /// The height field (its scalar value).
+    pub texture: Texture,
+    /// Multiplies the gradient (Mitsuba's `scale`).
+    pub scale: f32,
+}
+
 /// An alpha cutout: rays pass through where the mask is below `cutoff`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlphaMask {
@@ -371,6 +381,8 @@ pub struct MaterialTextures {
     pub emission: Option<Texture>,
     /// Perturbs the shading normal.
     pub normal_map: Option<NormalMap>,
+    /// A bump map (not with a normal map).
+    pub bump_map: Option<BumpMap>,
     /// Cuts holes.
     pub alpha: Option<AlphaMask>,
 }
@@ -410,6 +422,7 @@ impl MaterialTextures {
     pub fn all(&self) -> impl Iterator<Item = (&'static str, &Texture)> {
         self.values()
             .chain(self.normal_map.as_ref().map(|n| ("normal_map", &n.texture)))
+            .chain(self.bump_map.as_ref().map(|b| ("bump_map", &b.texture)))
             .chain(self.alpha.as_ref().map(|a| ("alpha", &a.texture)))
     }
 
@@ -417,7 +430,7 @@ impl MaterialTextures {
     /// (`SurfaceInteraction::uv`, `dpdu`, `dpdv` are computed only then).
     #[inline]
     pub fn uses_uv(&self) -> bool {
-        self.normal_map.is_some() || self.all().any(|(_, t)| !t.is_constant())
+        self.normal_map.is_some() || self.bump_map.is_some() || self.all().any(|(_, t)| !t.is_constant())
     }
 
     /// True when any texture is set.

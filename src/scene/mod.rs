@@ -3,6 +3,7 @@
 //! into shading data.
 
 pub mod camera;
+pub mod compare;
 pub mod conductors;
 pub mod cutout;
 pub mod desc;
@@ -15,6 +16,7 @@ pub mod media;
 pub mod medium;
 pub mod metals;
 pub mod mitsuba;
+pub mod write;
 
 use crate::film::denoise::DenoiseQuality;
 pub use crate::film::{OutputSettings, ToneMap};
@@ -29,7 +31,7 @@ pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};
 pub use material::{
-    AlphaMask, Blend, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
+    AlphaMask, Blend, BumpMap, Coating, CoatingTable, CoatingTableCell, Conductor, Dielectric, FresnelModel, Material,
     MaterialTextures, MicrofacetDistribution, Mirror, NormalMap, Principled, ShadingModel, COATING_TABLE_SIZE,
 };
 pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
@@ -467,6 +469,7 @@ impl Scene {
         let material = &self.materials[object.material as usize];
         let textures = material.textures.as_deref();
         let normal_map = textures.and_then(|t| t.normal_map.as_ref());
+        let bump_map = textures.and_then(|t| t.bump_map.as_ref());
         // The parametrisation costs trigonometry on spheres: only when read.
         let wants_uv = material.uses_uv();
         // The mesh's interpolated tangent, when it has tangents and a normal map reads them.
@@ -576,6 +579,10 @@ impl Scene {
                 perturbed_normal(ns, ng, t, sign, map, uv)
             }
         };
+        let ns = match bump_map {
+            None => ns,
+            Some(bump) => bumped_normal(ns, ng, dpdu, dpdv, bump, uv),
+        };
         SurfaceInteraction {
             p,
             p_error,
@@ -588,6 +595,23 @@ impl Scene {
             object: hit.instance,
             material: object.material,
         }
+    }
+}
+
+/// The shading normal `ns` tilted by a bump map, as Mitsuba 3's `bumpmap`:
+/// the height gradient `g = scale · ∇h(u, v)` replaces the normal
+/// component of the surface's derivatives, `∂p/∂u' = ∂p/∂u + ns (g_u −
+/// ns·∂p/∂u)` (likewise for `v`; the texture-space derivative of the
+/// normal itself is neglected), and the normal is `∂p/∂u' × ∂p/∂v'`,
+/// normalised and turned to `ng`'s side.
+fn bumped_normal(ns: Vec3A, ng: Vec3A, dpdu: Vec3A, dpdv: Vec3A, bump: &material::BumpMap, uv: Vec2) -> Vec3A {
+    let g = bump.texture.eval_scalar_grad(uv) * bump.scale;
+    let du = dpdu + ns * (g.x - ns.dot(dpdu));
+    let dv = dpdv + ns * (g.y - ns.dot(dpdv));
+    match du.cross(dv).try_normalize() {
+        Some(n) if n.dot(ng) < 0.0 => -n,
+        Some(n) => n,
+        None => ns,
     }
 }
 

@@ -220,6 +220,31 @@ impl Image {
         }
     }
 
+    /// The four texels a bilinear lookup at `uv` blends (`(x, y)`,
+    /// `(x + 1, y)`, `(x, y + 1)`, `(x + 1, y + 1)`) and the weights
+    /// `(fx, fy)` of the second column and row.
+    pub fn bilinear_corners(&self, uv: Vec2, wrap: [WrapMode; 2]) -> ([Vec4; 4], Vec2) {
+        let finite = |f: f32| if f.is_finite() { f } else { 0.0 };
+        let (x, y) = (
+            finite(uv.x * self.width as f32 - 0.5),
+            finite(uv.y * self.height as f32 - 0.5),
+        );
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let xs = [wrap[0].wrap(x0, self.width), wrap[0].wrap(x0 + 1, self.width)];
+        let ys = [wrap[1].wrap(y0, self.height), wrap[1].wrap(y0 + 1, self.height)];
+        (
+            [
+                self.texel(xs[0], ys[0]),
+                self.texel(xs[1], ys[0]),
+                self.texel(xs[0], ys[1]),
+                self.texel(xs[1], ys[1]),
+            ],
+            Vec2::new(fx, fy),
+        )
+    }
+
     /// Linear RGBA at `uv` (no transform), with `wrap` on each axis.
     pub fn lookup(&self, uv: Vec2, wrap: [WrapMode; 2], filter: FilterMode) -> Vec4 {
         let x = uv.x * self.width as f32;
@@ -303,6 +328,40 @@ impl ImageTexture {
     #[inline]
     pub fn eval_scalar(&self, uv: Vec2) -> f32 {
         let t = self.eval(uv);
+        match self.channel {
+            Channel::Luminance => luminance(t.truncate().into()),
+            Channel::R => t.x,
+            Channel::G => t.y,
+            Channel::B => t.z,
+            Channel::A => t.w,
+        }
+    }
+
+    /// The gradient `(∂f/∂u, ∂f/∂v)` of [`eval_scalar`](Self::eval_scalar)
+    /// at `uv`, as Mitsuba 3's `bitmap` gives it to `bumpmap`: the
+    /// derivative of the bilinear interpolation between the four texels
+    /// around the point, taken through the UV transform (its transpose), in
+    /// units of the image per unit of texture coordinate; zero for nearest
+    /// lookups, which are piecewise constant.
+    pub fn eval_scalar_grad(&self, uv: Vec2) -> Vec2 {
+        if self.filter == FilterMode::Nearest {
+            return Vec2::ZERO;
+        }
+        let p = self.transform.apply(uv);
+        let (corners, w1) = self.image.bilinear_corners(p, self.wrap);
+        let [f00, f10, f01, f11] = corners.map(|t| self.scalar_of(t));
+        let w0 = Vec2::ONE - w1;
+        // Partials with respect to the texel coordinates x and y.
+        let dx = w0.y * (f10 - f00) + w1.y * (f11 - f01);
+        let dy = w0.x * (f01 - f00) + w1.x * (f11 - f10);
+        let m = self.transform.0.matrix2;
+        let duv = Vec2::new(m.x_axis.x * dx + m.x_axis.y * dy, m.y_axis.x * dx + m.y_axis.y * dy);
+        duv * Vec2::new(self.image.width as f32, self.image.height as f32)
+    }
+
+    /// The scalar a lookup reads from linear RGBA `t` (factor applied).
+    fn scalar_of(&self, t: Vec4) -> f32 {
+        let t = t * Vec4::from((self.factor, self.alpha_factor));
         match self.channel {
             Channel::Luminance => luminance(t.truncate().into()),
             Channel::R => t.x,

@@ -151,6 +151,16 @@ impl Texture {
         }
     }
 
+    /// The gradient `(∂/∂u, ∂/∂v)` of [`eval_scalar`](Self::eval_scalar)
+    /// (a bump map's slope): an image's by its bilinear interpolation,
+    /// zero for a constant and for a checkerboard (flat between its edges).
+    pub fn eval_scalar_grad(&self, uv: Vec2) -> Vec2 {
+        match self {
+            Texture::Image(t) => t.eval_scalar_grad(uv),
+            Texture::Constant(_) | Texture::Checkerboard(_) => Vec2::ZERO,
+        }
+    }
+
     /// An upper bound of [`eval`](Self::eval) over the surface, per channel
     /// (what the render plan and the lint may assume without a lookup).
     pub fn max_value(&self) -> Vec3A {

@@ -7,4 +7,5 @@ pub mod cli;
 pub mod images;
 pub mod metrics;
 pub mod mitsuba;
+pub mod same;
 pub mod scenes;

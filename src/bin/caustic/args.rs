@@ -401,6 +401,18 @@ pub enum DebugView {
 }
 
 #[derive(Args)]
+pub struct ConvertArgs {
+    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: DefineArgs,
+    /// The caustic TOML file to write; meshes built in memory are written
+    /// beside it as `STEM-mesh-N.ply`.
+    #[arg(short = 'o', long = "output", value_name = "OUT.toml")]
+    pub output: PathBuf,
+}
+
+#[derive(Args)]
 pub struct InfoArgs {
     /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
     pub scene: PathBuf,

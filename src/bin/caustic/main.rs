@@ -7,7 +7,8 @@ mod render;
 mod view;
 
 use args::{
-    BenchArgs, ConvergeArgs, CrosscheckArgs, InfoArgs, MergeArgs, PhotonsArgs, RenderArgs, StressArgs, ViewArgs,
+    BenchArgs, ConvergeArgs, ConvertArgs, CrosscheckArgs, InfoArgs, MergeArgs, PhotonsArgs, RenderArgs, StressArgs,
+    ViewArgs,
 };
 use caustic::job::JobError;
 use caustic::scene::{self, Scene};
@@ -35,6 +36,10 @@ enum Command {
     Photons(PhotonsArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
+    /// Write any scene caustic reads (TOML, or Mitsuba XML with -D) as
+    /// caustic TOML that loads back to the same scene; meshes built in
+    /// memory go beside it as PLY files.
+    Convert(ConvertArgs),
     /// Cast seeded rays through two accelerators (default Embree and the
     /// KD-tree) and compare every hit; exit 1 on any disagreement that is not a tie.
     Crosscheck(CrosscheckArgs),
@@ -90,6 +95,7 @@ fn main() -> ExitCode {
         Command::Merge(args) => render::run_merge(args),
         Command::Photons(args) => render::run_photons(args),
         Command::Info(args) => measure::run_info(args),
+        Command::Convert(args) => run_convert(args),
         Command::Crosscheck(args) => measure::run_crosscheck(args),
         Command::Converge(args) => measure::run_converge(args),
         Command::Bench(args) => measure::run_bench(args),
@@ -107,6 +113,24 @@ fn main() -> ExitCode {
 
 fn load(path: &Path, defines: &args::DefineArgs) -> Result<Scene, Failure> {
     scene::load_scene_with(path, &defines.defines).map_err(bad_input)
+}
+
+/// `caustic convert`: the scene read, written as TOML, checked by reading
+/// it back.
+fn run_convert(args: ConvertArgs) -> Result<(), Failure> {
+    let scene = load(&args.scene, &args.defines)?;
+    let written = scene::write::write_toml_scene(&scene, &args.output).map_err(|e| Failure {
+        code: if e.is_input() { 2 } else { 1 },
+        error: e.into(),
+    })?;
+    println!("wrote {}", written.scene.display());
+    for m in &written.meshes {
+        println!("wrote {}", m.display());
+    }
+    for m in &written.referenced {
+        println!("references {}", m.display());
+    }
+    Ok(())
 }
 
 /// A job's error with the exit code its kind calls for.

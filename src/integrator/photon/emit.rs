@@ -239,7 +239,6 @@ impl<'a> PhotonTracer<'a> {
             .into_iter()
             .map(|light| {
                 let casters = match &light {
-                    Light::Environment { .. } => Vec::new(),
                     // Entirely behind the emitting plane: every direction to
                     // it has cos θ ≤ 0 and carries no power.
                     Light::Rect(a) => casters
@@ -319,8 +318,15 @@ impl<'a> PhotonTracer<'a> {
         } else {
             Vec2::from(rng.f32x2())
         };
-        let o = e.light.sample_origin(u_origin)?;
-        let (pick, u) = self.direction_sample(index, &mut rng);
+        // An environment's photon picks its direction first, then where it
+        // enters the scene's bounding disk (with the stratified sample).
+        let (o, (pick, u)) = if e.light.is_environment() {
+            let (pick, u) = self.direction_sample(index, &mut rng);
+            (e.light.sample_environment_origin(u_origin, u)?, (pick, u))
+        } else {
+            let o = e.light.sample_origin(u_origin)?;
+            (o, self.direction_sample(index, &mut rng))
+        };
         let cones = if o.direction.is_some() {
             None
         } else {

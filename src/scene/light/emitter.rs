@@ -73,7 +73,9 @@ pub enum Emitter {
         radiance: Vec3A,
         /// The image.
         map: Option<Arc<EnvironmentMap>>,
-        /// Radius of the scene's bounding sphere (for its power).
+        /// Centre of the scene's bounding sphere (where photons aim).
+        center: Vec3A,
+        /// Its radius (for the power and the photons' disk).
         radius: f32,
     },
     /// An object whose material emits.
@@ -105,6 +107,7 @@ impl Emitter {
             Light::Environment { radiance, map } => Emitter::Environment {
                 radiance: *radiance,
                 map: map.clone(),
+                center,
                 radius,
             },
         }
@@ -152,7 +155,9 @@ impl Emitter {
             Emitter::Spot(s) => s.power(),
             Emitter::Directional { irradiance, radius, .. } => *irradiance * (PI * radius * radius),
             Emitter::Rect(a) => a.power(),
-            Emitter::Environment { radiance, map, radius } => {
+            Emitter::Environment {
+                radiance, map, radius, ..
+            } => {
                 let mean = map.as_ref().map_or(Vec3A::ONE, |m| m.mean());
                 *radiance * mean * (PI * PI * radius * radius)
             }
@@ -282,9 +287,47 @@ impl Emitter {
         }
     }
 
+    /// True for an environment: its photons need
+    /// [`sample_environment_origin`](Self::sample_environment_origin).
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Emitter::Environment { .. })
+    }
+
+    /// Where a photon from the environment starts and where it goes: `u`
+    /// picks the direction toward the sky (the map's distribution, or
+    /// uniform for a constant), `u_disk` a point of the scene's bounding
+    /// disk facing it, behind the scene; the power is `Le · π r² / pdf`
+    /// (pbrt-v4's `ImageInfiniteLight::SampleLe`). `None` for other lights
+    /// and for a direction the map cannot send.
+    pub fn sample_environment_origin(&self, u: Vec2, u_disk: Vec2) -> Option<EmissionOrigin> {
+        let Emitter::Environment {
+            radiance,
+            map,
+            center,
+            radius,
+        } = self
+        else {
+            return None;
+        };
+        let (toward_sky, pdf) = match map {
+            Some(m) => m.sample(u)?,
+            None => (uniform_sphere(u), 1.0 / (4.0 * PI)),
+        };
+        let le = *radiance * map.as_ref().map_or(Vec3A::ONE, |m| m.eval(toward_sky));
+        let direction = -toward_sky;
+        let d = concentric_disk(u_disk) * *radius;
+        let f = Frame::from_normal(direction);
+        Some(EmissionOrigin {
+            x: *center + f.s * d.x + f.t * d.y - direction * (*radius * 1.01),
+            normal: None,
+            scale: le * (PI * radius * radius / pdf),
+            direction: Some(direction),
+        })
+    }
+
     /// Where a photon leaves the light for `u ∈ [0, 1)²` (pbrt's
-    /// `SampleLe`, position half); `None` for an environment, which emits
-    /// no photons.
+    /// `SampleLe`, position half); `None` for an environment, whose
+    /// direction comes first ([`sample_environment_origin`](Self::sample_environment_origin)).
     pub fn sample_origin(&self, u: Vec2) -> Option<EmissionOrigin> {
         let point = |x: Vec3A, scale: Vec3A| EmissionOrigin {
             x,

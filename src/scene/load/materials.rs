@@ -79,12 +79,12 @@ impl Ctx<'_> {
             let m = materials[j].clone();
             if m.textures
                 .as_ref()
-                .is_some_and(|t| t.normal_map.is_some() || t.alpha.is_some())
+                .is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some() || t.alpha.is_some())
             {
                 return Err(self.invalid(
                     s.span(),
                     format!(
-                        "`{}` has a normal map or an alpha cutout: give them to the blend itself",
+                        "`{}` has a normal map, a bump map or an alpha cutout: give them to the blend itself",
                         s.get_ref()
                     ),
                 ));
@@ -345,6 +345,21 @@ impl Ctx<'_> {
                 })
             }
         };
+        if let Some(n) = m.null.as_ref().filter(|n| *n.get_ref()) {
+            self.exclusive(
+                name,
+                "null",
+                n.span(),
+                &[
+                    ("mirror", m.mirror.is_some()),
+                    ("dielectric", m.dielectric.is_some()),
+                    ("conductor", m.conductor.is_some()),
+                    ("coating", m.coating.is_some()),
+                    ("principled", m.principled.is_some()),
+                    ("blend", m.blend.is_some()),
+                ],
+            )?;
+        }
         let (emission, emission_tex) = self.colour_param(&m.emission, "emission", Vec3A::ZERO, None)?;
         let strength = match &m.emission_strength {
             None => 1.0,
@@ -385,6 +400,21 @@ impl Ctx<'_> {
             });
         } else if let Some(s) = &m.normal_scale {
             return Err(self.invalid(s.span(), "`normal_scale` without a `normal_map`"));
+        }
+        if let Some(b) = &m.bump_map {
+            if m.normal_map.is_some() {
+                return Err(self.invalid(b.span(), "a material takes `normal_map` or `bump_map`, not both"));
+            }
+            let scale = match &m.bump_scale {
+                None => 1.0,
+                Some(s) => self.number(s, "bump_scale")?,
+            };
+            textures.bump_map = Some(crate::scene::BumpMap {
+                texture: self.texture_param(b, "bump_map", Usage::Scalar)?,
+                scale,
+            });
+        } else if let Some(s) = &m.bump_scale {
+            return Err(self.invalid(s.span(), "`bump_scale` without a `bump_map`"));
         }
         if let Some(a) = &m.alpha {
             let cutoff = match &m.alpha_cutoff {
@@ -438,7 +468,7 @@ impl Ctx<'_> {
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
             roughness_v,
-            null: false,
+            null: m.null.as_ref().is_some_and(|n| *n.get_ref()),
             principled,
             blend: None,
         })

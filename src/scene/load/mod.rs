@@ -15,12 +15,13 @@
 //! checked and the checks of single values, `settings` the `[render]`,
 //! `[photons]` and `[camera]` tables, `materials` and `lights` theirs,
 //! `objects` the objects, their mesh files, water surfaces and the
-//! `[medium]`; `error` defines [`SceneError`] and [`Place`].
+//! `[medium]`; `media` the `[media]` and where they are; `error` defines [`SceneError`] and [`Place`].
 
 mod ctx;
 mod error;
 mod lights;
 mod materials;
+mod media;
 mod objects;
 mod settings;
 mod textures;
@@ -29,11 +30,12 @@ pub use ctx::MAX_MAGNITUDE;
 pub use error::{Place, SceneError};
 pub use lights::{DEFAULT_AREA_LIGHT_SAMPLES, MAX_AREA_LIGHT_SAMPLES};
 pub use materials::{DEFAULT_DIFFUSE, DEFAULT_IOR, DEFAULT_SHININESS};
+pub use media::{DEFAULT_ALBEDO, DEFAULT_SIGMA_T};
 pub use objects::DEFAULT_WATER_RESOLUTION;
 pub use settings::{DEFAULT_VFOV_DEG, MAX_DEPTH, MAX_EXPOSURE_STOPS, MAX_PHOTON_GATHER};
 
 use crate::geometry::water::WaterSurface;
-use crate::scene::desc::{ObjectKind, SceneDesc};
+use crate::scene::desc::{IntegratorName, ObjectKind, SceneDesc};
 use crate::scene::{Object, Scene, Shape};
 use ctx::Ctx;
 use std::io::Read;
@@ -99,7 +101,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     };
     let mut settings = ctx.render(&desc.render)?;
     settings.photons = ctx.photons(&desc.photons)?;
-    let camera = ctx.camera(&desc.camera)?;
+    let camera = ctx.camera(desc.camera.get_ref(), desc.camera.span())?;
     let (materials, material_index) = ctx.materials(&desc.materials)?;
     let lights = desc
         .lights
@@ -171,22 +173,27 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         if let Shape::Mesh { mesh, .. } = &o.shape {
             let material = &materials[o.material as usize];
             let mesh = &meshes[*mesh as usize];
-            if material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
-                && mesh.uvs.is_empty()
-                && mesh.tangents.is_empty()
+            let bumped = material.textures.as_ref().is_some_and(|t| t.bump_map.is_some());
+            if (bumped && mesh.uvs.is_empty())
+                || (material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
+                    && mesh.uvs.is_empty()
+                    && mesh.tangents.is_empty())
             {
                 return Err(ctx.invalid(
                     desc.objects[i].material.span(),
                     format!(
-                        "material `{}` has a normal map, but mesh `{}` has no texture coordinates to orient it",
-                        material.name, mesh.name
+                        "material `{}` has a {} map, but mesh `{}` has no texture coordinates to orient it",
+                        material.name,
+                        if bumped { "bump" } else { "normal" },
+                        mesh.name
                     ),
                 ));
             }
         }
     }
+    let media = ctx.scene_media(&desc, desc.render.integrator == Some(IntegratorName::Volpath))?;
     let mut scene = Scene {
-        media: Default::default(),
+        media,
         settings,
         camera,
         materials,

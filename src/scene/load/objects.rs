@@ -20,7 +20,7 @@ use std::sync::Arc;
 pub const DEFAULT_WATER_RESOLUTION: u32 = 256;
 
 impl Ctx<'_> {
-    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 18] {
+    fn object_keys(o: &ObjectDesc) -> [(&'static str, Option<Range<usize>>); 19] {
         fn s<T>(x: &Option<Spanned<T>>) -> Option<Range<usize>> {
             x.as_ref().map(|x| x.span())
         }
@@ -39,6 +39,7 @@ impl Ctx<'_> {
             ("rotate", s(&o.rotate)),
             ("file", s(&o.file)),
             ("translate", s(&o.translate)),
+            ("matrix", s(&o.matrix)),
             ("scale", s(&o.scale)),
             ("smooth", s(&o.smooth)),
             ("waves", s(&o.waves)),
@@ -284,6 +285,19 @@ impl Ctx<'_> {
     /// runs from the quad's `u` direction toward its `v` direction.
     pub(super) fn disk(&self, o: &ObjectDesc) -> Result<Shape, SceneError> {
         let what = "a disk";
+        if let Some(u_desc) = &o.u {
+            // The semi-axes as given: an ellipse, or a circle in any frame.
+            let what = "a disk given by `u` and `v`";
+            self.only_keys(what, &Self::object_keys(o), &["center", "u", "v", "flip_normals"])?;
+            let center = self.vec3(self.required(&o.center, "center", what, o.kind.span())?, "center")?;
+            let v_desc = self.required(&o.v, "v", what, u_desc.span())?;
+            let (u, v) = (self.direction(u_desc, "u")?, self.direction(v_desc, "v")?);
+            let reversed = o.flip_normals.as_ref().is_some_and(|f| *f.get_ref());
+            return Disk::new(center, u, v, reversed)
+                .filter(|d| d.area() > 0.0 && d.area().is_finite())
+                .map(Shape::Disk)
+                .ok_or_else(|| self.invalid(v_desc.span(), "degenerate disk: `u` and `v` are parallel"));
+        }
         self.only_keys(
             what,
             &Self::object_keys(o),
@@ -338,9 +352,30 @@ impl Ctx<'_> {
         self.only_keys(
             what,
             &Self::object_keys(o),
-            &["file", "translate", "rotate", "scale", "smooth"],
+            &["file", "translate", "rotate", "scale", "matrix", "smooth"],
         )?;
         let file = self.required(&o.file, "file", what, o.kind.span())?;
+        let smooth = o.smooth.as_ref().is_some_and(|s| *s.get_ref());
+        if let Some(m) = &o.matrix {
+            if let Some((key, span)) = [("translate", &o.translate), ("rotate", &o.rotate)]
+                .into_iter()
+                .find_map(|(k, s)| s.as_ref().map(|s| (k, s.span())))
+                .or(o.scale.as_ref().map(|s| ("scale", s.span())))
+            {
+                return Err(self.invalid(span, format!("`{key}` with `matrix`: give the transform one way")));
+            }
+            let mut rows = [[0f32; 4]; 3];
+            for (row, desc) in rows.iter_mut().zip(m.get_ref().0) {
+                for (x, d) in row.iter_mut().zip(desc.0) {
+                    *x = self.check_finite(d, m.span(), "matrix")?;
+                }
+            }
+            let col = |j: usize| Vec3::new(rows[0][j], rows[1][j], rows[2][j]);
+            let affine = crate::math::Affine3A::from_cols(col(0).into(), col(1).into(), col(2).into(), col(3).into());
+            let transform = Transform::from_affine(affine)
+                .ok_or_else(|| self.invalid(m.span(), "the mesh `matrix` is singular"))?;
+            return Ok((file, transform, smooth));
+        }
         let translate = self.opt_vec3(&o.translate, "translate", Vec3A::ZERO)?;
         let rotate = self.opt_vec3(&o.rotate, "rotate", Vec3A::ZERO)?;
         let scale = match &o.scale {
@@ -365,7 +400,7 @@ impl Ctx<'_> {
                 let span = o.scale.as_ref().map_or(o.kind.span(), |s| s.span());
                 self.invalid(span, "the mesh transform is singular (scale too small)")
             })?;
-        Ok((file, transform, o.smooth.as_ref().is_some_and(|s| *s.get_ref())))
+        Ok((file, transform, smooth))
     }
 
     /// Resolves the mesh files, loads each distinct one once (in parallel),

@@ -138,17 +138,38 @@ impl Ctx<'_> {
             }),
             integrator: match r.integrator {
                 None | Some(IntegratorName::Whitted) => IntegratorKind::Whitted,
-                Some(IntegratorName::Path) => IntegratorKind::Path,
+                Some(IntegratorName::Path | IntegratorName::Volpath) => IntegratorKind::Path,
             },
         })
     }
 
-    pub(super) fn camera(&self, c: &CameraDesc) -> Result<Camera, SceneError> {
+    pub(super) fn camera(&self, c: &CameraDesc, table: std::ops::Range<usize>) -> Result<Camera, SceneError> {
         let position = self.vec3(&c.position, "position")?;
-        let look_at = self.vec3(&c.look_at, "look_at")?;
+        let look_at_desc = match (&c.look_at, &c.forward) {
+            (Some(l), None) => {
+                if let Some(r) = &c.right {
+                    return Err(self.invalid(r.span(), "`right` goes with `forward` (instead of `look_at`)"));
+                }
+                l
+            }
+            (Some(_), Some(f)) => {
+                return Err(self.invalid(
+                    f.span(),
+                    "give `look_at` or `forward` (with `right` and `up`), not both",
+                ))
+            }
+            (None, Some(f)) => return self.camera_frame(c, position, f),
+            (None, None) => {
+                return Err(self.invalid(
+                    table,
+                    "missing field `look_at` in `[camera]` (or give its exact frame: `forward`, `right` and `up`)",
+                ))
+            }
+        };
+        let look_at = self.vec3(look_at_desc, "look_at")?;
         let forward = (look_at - position).try_normalize().ok_or_else(|| {
             self.invalid(
-                c.look_at.span(),
+                look_at_desc.span(),
                 "`look_at` equals the camera `position`: the camera has no viewing direction",
             )
         })?;
@@ -161,13 +182,62 @@ impl Ctx<'_> {
         if forward.cross(up.normalize()).length() < 1e-4 {
             let (span, what) = match &c.up {
                 Some(s) => (s.span(), "`up`"),
-                None => (c.look_at.span(), "the default `up` [0, 1, 0]"),
+                None => (look_at_desc.span(), "the default `up` [0, 1, 0]"),
             };
             return Err(self.invalid(
                 span,
                 format!("{what} is parallel to the viewing direction (`look_at` − `position`): choose another `up`"),
             ));
         }
+        let (fov_deg, fov_axis) = self.field_of_view(c)?;
+        let camera = Camera::new(position, look_at, up, fov_deg)
+            .ok_or_else(|| self.invalid(c.position.span(), "the camera is degenerate"))?;
+        self.camera_optics(c, camera, fov_deg, fov_axis)
+    }
+
+    /// A camera given by its exact frame: `forward`, `right` and `up`, unit
+    /// and orthogonal (within 1e-4), taken as written (the frame
+    /// `caustic convert` writes, which `look_at` would round).
+    fn camera_frame(
+        &self,
+        c: &CameraDesc,
+        position: Vec3A,
+        forward_desc: &Spanned<crate::scene::desc::Vec3Desc>,
+    ) -> Result<Camera, SceneError> {
+        let what = "a camera given by `forward`";
+        let forward = self.vec3(forward_desc, "forward")?;
+        let right_desc = self.required(&c.right, "right", what, forward_desc.span())?;
+        let right = self.vec3(right_desc, "right")?;
+        let up_desc = self.required(&c.up, "up", what, forward_desc.span())?;
+        let up = self.vec3(up_desc, "up")?;
+        for (v, s, key) in [
+            (forward, forward_desc, "forward"),
+            (right, right_desc, "right"),
+            (up, up_desc, "up"),
+        ] {
+            if (v.length() - 1.0).abs() > 1e-4 {
+                return Err(self.invalid(s.span(), format!("`{key}` = {v} must be a unit vector")));
+            }
+        }
+        let orthogonal =
+            forward.dot(right).abs() <= 1e-4 && forward.dot(up).abs() <= 1e-4 && right.dot(up).abs() <= 1e-4;
+        if !orthogonal {
+            return Err(self.invalid(right_desc.span(), "`forward`, `right` and `up` must be orthogonal"));
+        }
+        let (fov_deg, fov_axis) = self.field_of_view(c)?;
+        let camera = Camera {
+            position,
+            forward,
+            right,
+            up,
+            // A focus distance of 1 unless given (there is no point looked at).
+            ..Camera::new(Vec3A::ZERO, Vec3A::Z, Vec3A::Y, fov_deg).expect("a valid frame")
+        };
+        self.camera_optics(c, camera, fov_deg, fov_axis)
+    }
+
+    /// The field of view (`vfov`, or `fov` with `fov_axis`).
+    fn field_of_view(&self, c: &CameraDesc) -> Result<(f32, FovAxis), SceneError> {
         let (fov_key, fov) = match (&c.vfov, &c.fov) {
             (Some(_), Some(f)) => {
                 return Err(self.invalid(
@@ -203,8 +273,18 @@ impl Ctx<'_> {
                 )
             })?,
         };
-        let mut camera = Camera::new(position, look_at, up, fov_deg)
-            .ok_or_else(|| self.invalid(c.position.span(), "the camera is degenerate"))?;
+        Ok((fov_deg, fov_axis))
+    }
+
+    /// The lens, the near clip and the pixel filter of `camera`, and its field of view.
+    fn camera_optics(
+        &self,
+        c: &CameraDesc,
+        mut camera: Camera,
+        fov_deg: f32,
+        fov_axis: FovAxis,
+    ) -> Result<Camera, SceneError> {
+        camera.fov_deg = fov_deg;
         camera.fov_axis = fov_axis;
         let non_negative = |s: &Option<Spanned<f64>>, key: &str| -> Result<Option<f32>, SceneError> {
             let Some(s) = s else { return Ok(None) };

@@ -139,7 +139,7 @@ impl Builder<'_> {
                 let mut sides = Vec::new();
                 for (b, _) in &inner {
                     let side = self.bsdf(b)?;
-                    if side.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) {
+                    if side.textures.as_ref().is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some()) {
                         return Err(b.error(
                             "a normal map inside a blend is not supported (put the normalmap around the blend)",
                         ));
@@ -181,6 +181,36 @@ impl Builder<'_> {
                 p.finish()?;
                 return Ok(m);
             }
+            "bumpmap" => {
+                // One nested texture (any name) and one nested BSDF
+                // (`src/bsdfs/bumpmap.cpp`).
+                let textures = p.children_of("texture")?;
+                let [(map, _)] = <[_; 1]>::try_from(textures).map_err(|v: Vec<_>| {
+                    p.error(format!("takes one nested <texture> (the height field), not {}", v.len()))
+                })?;
+                let texture = self.texture(&map)?;
+                if matches!(texture, crate::texture::Texture::Checkerboard(_)) {
+                    return Err(map.error("a bump map's height field must be a `bitmap` (Mitsuba's checkerboard has no gradient)"));
+                }
+                let scale = p.float("scale")?.unwrap_or(1.0);
+                if !scale.is_finite() {
+                    return Err(p.error(format!("`scale` = {scale} must be finite")));
+                }
+                let inner = p
+                    .single_child("bsdf")?
+                    .ok_or_else(|| p.error("needs a nested <bsdf>"))?;
+                let mut m = self.bsdf(&inner)?;
+                if m.textures.as_ref().is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some()) {
+                    return Err(p.error("a bump map around a normal or bump map is not supported"));
+                }
+                m.textures.get_or_insert_with(Default::default).bump_map =
+                    Some(crate::scene::BumpMap { texture, scale });
+                if let Some(id) = p.element.attr("id") {
+                    m.name = id.to_string();
+                }
+                p.finish()?;
+                return Ok(m);
+            }
             "normalmap" => {
                 let map = p
                     .child_named("normalmap")?
@@ -190,8 +220,8 @@ impl Builder<'_> {
                     .single_child("bsdf")?
                     .ok_or_else(|| p.error("needs a nested <bsdf>"))?;
                 let mut m = self.bsdf(&inner)?;
-                if m.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) {
-                    return Err(p.error("nested normal maps are not supported"));
+                if m.textures.as_ref().is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some()) {
+                    return Err(p.error("nested normal maps (or a normal map around a bump map) are not supported"));
                 }
                 m.textures.get_or_insert_with(Default::default).normal_map =
                     Some(NormalMap { texture: map, scale: 1.0 });
@@ -203,7 +233,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, null, twosided and normalmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, blendbsdf, mask, null, twosided, normalmap and bumpmap"
                 )))
             }
         }

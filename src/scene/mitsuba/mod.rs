@@ -187,9 +187,14 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
             *smooth &= !meshes.face_normals[*mesh as usize];
             let material = &materials[o.material as usize];
             let mesh = &meshes.meshes[*mesh as usize];
-            if material.textures.as_ref().is_some_and(|t| t.normal_map.is_some()) && mesh.uvs.is_empty() {
+            if material
+                .textures
+                .as_ref()
+                .is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some())
+                && mesh.uvs.is_empty()
+            {
                 return Err(doc.root.origin.error(format!(
-                    "shape `{}` has a normal map, but its mesh `{}` has no texture coordinates",
+                    "shape `{}` has a normal or bump map, but its mesh `{}` has no texture coordinates",
                     o.name, mesh.name
                 )));
             }
