@@ -357,3 +357,18 @@ fn an_environment_image_replaces_the_default_environment() {
         grey / default
     );
 }
+
+#[test]
+fn convert_writes_a_model_as_toml_that_loads_back_to_the_same_scene() {
+    // `caustic convert` compares the scene it wrote, read back, with the
+    // model's; it exits 0 only when they agree.
+    let dir = tempfile::tempdir().unwrap();
+    for model in ["nodes.gltf", "emissive_quad.glb"] {
+        let out = dir.path().join(format!("{model}.toml"));
+        let path = data(model);
+        let o = caustic(&["convert", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{model}: {}", describe(&o));
+        let s = caustic::scene::load_scene(&out).unwrap();
+        assert_eq!(s.objects.len(), load(model).scene.objects.len());
+    }
+}
