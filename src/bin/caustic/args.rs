@@ -314,7 +314,7 @@ pub struct RenderArgs {
 
 #[derive(Args)]
 pub struct PhotonsArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -402,7 +402,7 @@ pub enum DebugView {
 
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -414,7 +414,7 @@ pub struct ConvertArgs {
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -427,7 +427,7 @@ pub struct InfoArgs {
 
 #[derive(Args)]
 pub struct CrosscheckArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -515,7 +515,7 @@ pub enum GatherArg {
 
 #[derive(Args)]
 pub struct ConvergeArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
