@@ -372,3 +372,11 @@ fn convert_writes_a_model_as_toml_that_loads_back_to_the_same_scene() {
         assert_eq!(s.objects.len(), load(model).scene.objects.len());
     }
 }
+
+#[test]
+fn the_viewer_opens_a_model() {
+    let e = caustic::view::EditableScene::open(&data("nodes.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(e.scene.objects.len(), 2);
+    // Its edits are saved as caustic TOML, not written into the model.
+    assert!(e.save_camera().is_err());
+}

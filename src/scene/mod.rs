@@ -37,6 +37,12 @@ pub use material::{
 pub use media::{HomogeneousMedium, Media, MediumInterface, PassThrough, PhaseFunction};
 pub use medium::Medium;
 
+/// True when [`load_scene`] reads `path` as caustic's own TOML (the other
+/// formats are chosen by extension).
+pub fn is_toml_path(path: &std::path::Path) -> bool {
+    !mitsuba::is_mitsuba_path(path) && !gltf::is_gltf_path(path)
+}
+
 /// Loads a scene file, choosing the format by extension: `.xml` is a
 /// Mitsuba scene, `.gltf` and `.glb` a glTF 2.0 model (their warnings
 /// printed to stderr), anything else caustic's TOML.

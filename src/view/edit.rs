@@ -1,7 +1,9 @@
 //! The scene as the viewer edits it: the loaded [`Scene`], the orbit camera,
 //! each light's colour and intensity kept apart (the scene stores their
-//! product), and the scene file's TOML document, into which edits are
-//! written back with their comments and layout kept.
+//! product), and, for a caustic TOML file, its document, into which edits
+//! are written back with their comments and layout kept. A scene of another
+//! format (Mitsuba XML) is saved as caustic TOML by the writer of
+//! `caustic convert` ([`crate::scene::write`]).
 
 use super::orbit::Orbit;
 use crate::film::output::write_atomically;
@@ -42,7 +44,23 @@ pub struct EditableScene {
     pub initial_orbit: Orbit,
     /// One per scene light.
     pub lights: Vec<LightEdit>,
-    doc: DocumentMut,
+    /// The TOML document of the file; `None` when the scene was read from
+    /// another format.
+    doc: Option<DocumentMut>,
+}
+
+/// Why the viewer could not save.
+#[derive(Debug, thiserror::Error)]
+pub enum SaveError {
+    /// The file could not be written.
+    #[error("{0}")]
+    Output(#[from] OutputError),
+    /// The scene could not be written as TOML.
+    #[error("{0}")]
+    Convert(#[from] crate::scene::write::WriteError),
+    /// The scene file is not caustic TOML: only a whole scene can be saved.
+    #[error("{0} is not a caustic TOML file: save the scene as TOML instead")]
+    NotToml(PathBuf),
 }
 
 /// A number of a TOML array or value, integer or float.
@@ -109,23 +127,11 @@ fn set(table: &mut dyn TableLike, key: &str, item: Item) {
 impl EditableScene {
     /// Loads `path` (validated like `caustic render` does).
     pub fn open(path: &Path) -> Result<Self, SceneError> {
-        if scene::mitsuba::is_mitsuba_path(path) {
-            // The viewer writes its edits back through the TOML file.
-            return Err(SceneError::Toml {
-                path: path.to_path_buf(),
-                place: None,
-                message: "the viewer opens caustic TOML scenes; render a Mitsuba scene with `caustic render`".into(),
-            });
-        }
-        if scene::gltf::is_gltf_path(path) {
-            return Err(SceneError::Gltf {
-                path: path.to_path_buf(),
-                pointer: String::new(),
-                message: "the viewer opens caustic TOML scenes; render a glTF model with `caustic render`".into(),
-            });
-        }
         // The loader checks size, encoding and every value first.
         let scene = scene::load_scene(path)?;
+        if !scene::is_toml_path(path) {
+            return Ok(Self::from_parts(path, scene, None));
+        }
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
             path: path.to_path_buf(),
             error,
@@ -135,29 +141,36 @@ impl EditableScene {
             place: None,
             message: e.message().to_string(),
         })?;
-        Ok(Self::from_parts(path, scene, doc))
+        Ok(Self::from_parts(path, scene, Some(doc)))
     }
 
-    fn from_parts(path: &Path, scene: Scene, doc: DocumentMut) -> Self {
+    fn from_parts(path: &Path, scene: Scene, doc: Option<DocumentMut>) -> Self {
         let cam = &scene.camera;
-        let target = vec3_of(doc.get("camera").and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
-        let up = vec3_of(doc.get("camera").and_then(|c| c.get("up"))).unwrap_or(Vec3A::Y);
+        let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
+        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
+        let up =
+            vec3_of(camera_table.and_then(|c| c.get("up"))).unwrap_or(if doc.is_some() { Vec3A::Y } else { cam.up });
         // The orbit keeps a vertical field of view: the file's, whatever axis it spans.
         let s = &scene.settings;
         let vfov = cam.vertical_fov_deg(s.width as f32 / s.height as f32);
         let orbit = Orbit::looking_at(cam.position, target, up, vfov)
             .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, vfov))
             .expect("a valid camera has a view direction");
-        let light_tables = doc.get("lights").and_then(|l| l.as_array_of_tables());
+        let light_tables = doc
+            .as_ref()
+            .and_then(|d| d.get("lights"))
+            .and_then(|l| l.as_array_of_tables());
         let lights = scene
             .lights
             .iter()
             .enumerate()
             .map(|(i, light)| {
                 let t = light_tables.and_then(|a| a.get(i));
+                // Without the file's split, the colour is the light's own
+                // product and the intensity 1.
                 let colour = t
                     .and_then(|t| vec3_of(t.get("colour").or_else(|| t.get("color"))))
-                    .unwrap_or(Vec3A::ONE);
+                    .unwrap_or_else(|| if t.is_some() { Vec3A::ONE } else { light_power(light) });
                 let intensity = t.and_then(|t| number_of(t.get("intensity"))).unwrap_or(1.0);
                 let position = light.position().unwrap_or(Vec3A::ZERO);
                 let samples = match light {
@@ -230,23 +243,24 @@ impl EditableScene {
         }
     }
 
-    /// The scene file's text with every edit written in.
-    pub fn to_toml(&self) -> String {
-        self.edited_doc().to_string()
+    /// The scene file's text with every edit written in (`None` for a
+    /// scene read from another format).
+    pub fn to_toml(&self) -> Option<String> {
+        self.edited_doc().map(|d| d.to_string())
     }
 
-    fn edited_doc(&self) -> DocumentMut {
-        let mut doc = self.doc.clone();
+    fn edited_doc(&self) -> Option<DocumentMut> {
+        let mut doc = self.doc.clone()?;
         self.write_camera(&mut doc);
         self.write_edits(&mut doc);
-        doc
+        Some(doc)
     }
 
     /// The scene file's text with only the camera changed (to the view's).
-    pub fn camera_toml(&self) -> String {
-        let mut doc = self.doc.clone();
+    pub fn camera_toml(&self) -> Option<String> {
+        let mut doc = self.doc.clone()?;
         self.write_camera(&mut doc);
-        doc.to_string()
+        Some(doc.to_string())
     }
 
     fn write_camera(&self, doc: &mut DocumentMut) {
@@ -293,17 +307,41 @@ impl EditableScene {
     }
 
     /// Writes the edited scene to `path` atomically; `caustic render path`
-    /// then renders what the viewer shows.
-    pub fn save(&self, path: &Path) -> Result<(), OutputError> {
-        let mut doc = self.edited_doc();
-        rebase_mesh_files(&mut doc, &self.path, path);
-        write_text(path, &doc.to_string())
+    /// then renders what the viewer shows. A TOML file keeps its comments
+    /// and layout; a scene of another format is written whole as caustic
+    /// TOML (meshes it built as PLY files beside it), as `caustic convert`
+    /// writes it.
+    pub fn save(&self, path: &Path) -> Result<(), SaveError> {
+        match self.edited_doc() {
+            Some(mut doc) => {
+                rebase_mesh_files(&mut doc, &self.path, path);
+                Ok(write_text(path, &doc.to_string())?)
+            }
+            None => {
+                crate::scene::write::write_toml_scene(&self.scene, path)?;
+                Ok(())
+            }
+        }
     }
 
     /// Writes the view's camera into the scene file's `[camera]` (nothing
-    /// else of the file changes), atomically.
-    pub fn save_camera(&self) -> Result<(), OutputError> {
-        write_text(&self.path, &self.camera_toml())
+    /// else of the file changes), atomically; only for a TOML file.
+    pub fn save_camera(&self) -> Result<(), SaveError> {
+        let text = self
+            .camera_toml()
+            .ok_or_else(|| SaveError::NotToml(self.path.clone()))?;
+        Ok(write_text(&self.path, &text)?)
+    }
+}
+
+/// A light's emitted colour as the scene stores it (colour × intensity).
+fn light_power(light: &Light) -> Vec3A {
+    match light {
+        Light::Point { intensity, .. } => *intensity,
+        Light::Spot(s) => s.intensity,
+        Light::Directional { irradiance, .. } => *irradiance,
+        Light::Area(a) => a.radiance,
+        Light::Environment { radiance, .. } => *radiance,
     }
 }
 
@@ -449,6 +487,36 @@ material = "white"
         let p = dir.join("s.toml");
         std::fs::write(&p, text).unwrap();
         EditableScene::open(&p).unwrap()
+    }
+
+    /// A Mitsuba scene opens, its edits apply, and "save scene" writes it as
+    /// caustic TOML that loads back to the edited scene; writing the camera
+    /// into the XML file is refused.
+    #[test]
+    fn a_mitsuba_scene_is_edited_and_saved_as_toml() {
+        let xml = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/room.xml");
+        let mut e = EditableScene::open(&xml).unwrap();
+        assert!(e.to_toml().is_none());
+        let before = e.scene.lights.clone();
+        assert!(
+            !before.is_empty()
+                || e.scene
+                    .objects
+                    .iter()
+                    .any(|o| e.scene.materials[o.material as usize].emits())
+        );
+        for l in &mut e.lights {
+            l.intensity = 2.0;
+        }
+        e.orbit = e.initial_orbit;
+        e.apply();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("room.toml");
+        e.save(&out).unwrap();
+        let again = scene::load_scene(&out).unwrap();
+        assert_eq!(crate::scene::compare::first_difference(&again, &e.scene), None);
+        assert_ne!(again.lights, before, "the edit is saved");
+        assert!(matches!(e.save_camera(), Err(SaveError::NotToml(_))));
     }
 
     #[test]

@@ -685,7 +685,7 @@ pub const DEFAULT_A: &str = "brute";
 /// `caustic view`.
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
