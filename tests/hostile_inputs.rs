@@ -178,6 +178,24 @@ fn mitsuba_mesh(kind: &str, file: &str) -> String {
     format!("<shape type=\"{kind}\"><string name=\"filename\" value=\"{file}\"/></shape>")
 }
 
+/// A committed glTF model (`tests/data/gltf/`).
+fn gltf_data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf").join(name)
+}
+
+/// `tests/data/gltf/textured_quad.gltf` changed by `change`, as `model.gltf`.
+fn gltf_model(dir: &Path, change: impl FnOnce(&mut serde_json::Value)) -> Run {
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(gltf_data("textured_quad.gltf")).unwrap()).unwrap();
+    change(&mut doc);
+    Run::scene(write(dir, "model.gltf", serde_json::to_vec(&doc).unwrap()))
+}
+
+fn base64_decode(text: &str) -> Vec<u8> {
+    use base64::Engine;
+    base64::engine::general_purpose::STANDARD.decode(text).unwrap()
+}
+
 /// One hostile input.
 struct Case {
     /// Identifier, listed in `docs/hostile-inputs.md`.
@@ -900,6 +918,109 @@ fn cases() -> Vec<Case> {
                 write(d, "m.serialized", serialized_tri());
                 mitsuba(d, &mitsuba_mesh("serialized", "m.serialized"))
             },
+        },
+        Case {
+            name: "gltf-accessor-out-of-range",
+            what: "glTF `POSITION` naming accessor 99 of 4",
+            expect: Some(&["model.gltf: /meshes/0/primitives/0/attributes/POSITION: accessor 99 out of range"]),
+            setup: |d| gltf_model(d, |m| m["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99.into()),
+        },
+        Case {
+            name: "gltf-accessor-offset-past-view",
+            what: "glTF accessor `byteOffset` 1000 in a 48-byte buffer view",
+            expect: Some(&["model.gltf: /meshes/0/primitives/0/attributes/POSITION (accessor 0): 4 elements", "buffer view 0 has 48"]),
+            setup: |d| gltf_model(d, |m| m["accessors"][0]["byteOffset"] = 1000.into()),
+        },
+        Case {
+            name: "gltf-wrong-component-type",
+            what: "glTF `POSITION` of unsigned bytes",
+            expect: Some(&["model.gltf: /meshes/0/primitives/0/attributes/POSITION: POSITION: accessor 0 has component type UNSIGNED_BYTE; glTF allows FLOAT"]),
+            setup: |d| gltf_model(d, |m| m["accessors"][0]["componentType"] = 5121.into()),
+        },
+        Case {
+            name: "gltf-wrong-component-count",
+            what: "glTF `POSITION` of type `VEC2`",
+            expect: Some(&["model.gltf: /meshes/0/primitives/0/attributes/POSITION: POSITION needs 3 components"]),
+            setup: |d| gltf_model(d, |m| m["accessors"][0]["type"] = "VEC2".into()),
+        },
+        Case {
+            name: "gltf-absurd-count",
+            what: "glTF accessor `count` 4 × 10^9",
+            expect: Some(&["model.gltf: /accessors/0/count: 4000000000 elements: more than the limit"]),
+            setup: |d| gltf_model(d, |m| m["accessors"][0]["count"] = 4_000_000_000u64.into()),
+        },
+        Case {
+            name: "gltf-truncated-bin",
+            what: "glTF buffer in `model.bin` cut to half its `byteLength`",
+            expect: Some(&["model.gltf: /buffers/0/byteLength: 142 bytes, but", "model.bin has only 71: truncated"]),
+            setup: |d| {
+                let run = gltf_model(d, |_| {});
+                let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&run.scene).unwrap()).unwrap();
+                let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+                let bytes = base64_decode(uri.split_once(',').unwrap().1);
+                write(d, "model.bin", &bytes[..bytes.len() / 2]);
+                doc["buffers"][0]["uri"] = "model.bin".into();
+                Run::scene(write(d, "model.gltf", serde_json::to_vec(&doc).unwrap()))
+            },
+        },
+        Case {
+            name: "gltf-truncated-glb",
+            what: "a GLB file cut in its binary chunk",
+            expect: Some(&["model.glb: truncated GLB file: the header announces"]),
+            setup: |d| {
+                let glb = std::fs::read(gltf_data("emissive_quad.glb")).unwrap();
+                Run::scene(write(d, "model.glb", &glb[..glb.len() - 40]))
+            },
+        },
+        Case {
+            name: "gltf-bad-data-uri",
+            what: "glTF buffer data URI that is not base64",
+            expect: Some(&["model.gltf: /buffers/0/uri: the data URI does not decode as base64"]),
+            setup: |d| gltf_model(d, |m| m["buffers"][0]["uri"] = "data:application/octet-stream;base64,@@@".into()),
+        },
+        Case {
+            name: "gltf-missing-image",
+            what: "glTF image `missing.png` that does not exist",
+            expect: Some(&["model.gltf: /images/0:", "missing.png: cannot open"]),
+            setup: |d| gltf_model(d, |m| m["images"][0]["uri"] = "missing.png".into()),
+        },
+        Case {
+            name: "gltf-image-decompression-bomb",
+            what: "glTF image: a PNG header announcing 100000 × 100000 texels",
+            expect: Some(&["model.gltf: /images/0:", "bomb.png: refused", "textures are at most 32768×32768 texels"]),
+            setup: |d| {
+                write(d, "bomb.png", common::images::huge_png_header());
+                gltf_model(d, |m| m["images"][0]["uri"] = "bomb.png".into())
+            },
+        },
+        Case {
+            name: "gltf-uri-outside-folder",
+            what: "glTF buffer URI `../outside.bin` (the file exists)",
+            expect: Some(&["model.gltf: /buffers/0/uri: `../outside.bin` leads outside the model's folder", "--allow-outside-files"]),
+            setup: |d| {
+                let sub = d.join("model");
+                std::fs::create_dir(&sub).unwrap();
+                write(d, "outside.bin", vec![0u8; 200]);
+                let run = gltf_model(&sub, |m| m["buffers"][0]["uri"] = "../outside.bin".into());
+                Run::scene(run.scene)
+            },
+        },
+        Case {
+            name: "gltf-requires-draco",
+            what: "glTF `extensionsRequired: [\"KHR_draco_mesh_compression\"]`",
+            expect: Some(&["model.gltf: /extensionsRequired/0: the model requires the extension `KHR_draco_mesh_compression`, which caustic does not implement"]),
+            setup: |d| {
+                gltf_model(d, |m| {
+                    m["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+                    m["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+                })
+            },
+        },
+        Case {
+            name: "gltf-valid-reference",
+            what: "a valid glTF textured quad (control case)",
+            expect: None,
+            setup: |d| gltf_model(d, |_| {}),
         },
     ]
 }

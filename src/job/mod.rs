@@ -78,12 +78,95 @@ pub struct Overrides {
     /// `-D name=value` parameters of a Mitsuba scene, used when the file is
     /// read (see [`crate::scene::load_scene_with`]).
     pub defines: Vec<(String, String)>,
+    /// A glTF model's camera by name or index (`--camera`), chosen when
+    /// the file is read.
+    pub camera: Option<String>,
+    /// Let a glTF model's URIs name files outside its folder
+    /// (`--allow-outside-files`).
+    pub allow_outside_files: bool,
+    /// A latitude-longitude image (`.hdr`, `.exr`) that replaces the
+    /// scene's environment light, or lights a scene without one
+    /// (`--environment`).
+    pub environment: Option<PathBuf>,
+    /// Multiplies the environment light's radiance (`--environment-intensity`).
+    pub environment_intensity: Option<f32>,
+    /// Turns the environment image about the world's up axis (+y), in
+    /// degrees, counter-clockwise seen from above (`--environment-rotation`).
+    pub environment_rotation: Option<f32>,
 }
 
 impl Overrides {
+    /// What the scene's front end needs to read the file (`-D`, `--camera`,
+    /// `--allow-outside-files`).
+    pub fn load_options(&self) -> scene::LoadOptions {
+        scene::LoadOptions {
+            defines: self.defines.clone(),
+            gltf: scene::gltf::GltfOptions {
+                camera: self.camera.as_deref().map(|c| c.parse().expect("infallible")),
+                allow_outside_files: self.allow_outside_files,
+            },
+        }
+    }
+
+    /// Applies `--environment`, `--environment-intensity` and
+    /// `--environment-rotation` to the scene's lights.
+    fn apply_environment(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+        use crate::math::{Mat3A, Vec3A};
+        use crate::scene::light::EnvironmentMap;
+        use crate::scene::Light;
+        if self.environment.is_none() && self.environment_intensity.is_none() && self.environment_rotation.is_none() {
+            return Ok(());
+        }
+        let rotation = match self.environment_rotation {
+            Some(deg) if !deg.is_finite() => {
+                return Err(JobError::Invalid(format!(
+                    "--environment-rotation {deg}: must be finite"
+                )))
+            }
+            Some(deg) => Mat3A::from_rotation_y(deg.to_radians()),
+            None => Mat3A::IDENTITY,
+        };
+        let scale = match self.environment_intensity {
+            Some(k) if !(k.is_finite() && k >= 0.0) => {
+                return Err(JobError::Invalid(format!("--environment-intensity {k}: must be ≥ 0")))
+            }
+            Some(k) => k,
+            None => 1.0,
+        };
+        if let Some(path) = &self.environment {
+            let image = crate::io::image::load_image(path, crate::texture::ColourSpace::Srgb)
+                .map_err(|e| JobError::Invalid(format!("--environment: {e}")))?;
+            let map = std::sync::Arc::new(EnvironmentMap::new(std::sync::Arc::new(image), rotation));
+            scene.lights.retain(|l| !matches!(l, Light::Environment { .. }));
+            scene.lights.push(Light::Environment {
+                radiance: Vec3A::splat(scale),
+                map: Some(map),
+            });
+            return Ok(());
+        }
+        let mut found = false;
+        for light in &mut scene.lights {
+            if let Light::Environment { radiance, map } = light {
+                found = true;
+                *radiance *= scale;
+                if let (Some(m), Some(_)) = (map.as_mut(), self.environment_rotation) {
+                    *m = std::sync::Arc::new(EnvironmentMap::new(m.image.clone(), rotation * m.to_world));
+                }
+            }
+        }
+        if !found {
+            return Err(JobError::Invalid(format!(
+                "{}: --environment-intensity and --environment-rotation need an environment light (the scene has none; give one with --environment)",
+                source.display()
+            )));
+        }
+        Ok(())
+    }
+
     /// Applies the overrides to `scene` (loaded from `source`), refusing
     /// values beyond the limits with the file named in the message.
     pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+        self.apply_environment(scene, source)?;
         // Media and null surfaces are the path integrator's alone.
         let volumetric = scene.is_volumetric();
         let s = &mut scene.settings;
@@ -415,7 +498,7 @@ impl RenderJob {
     /// Loads and checks everything a render needs; nothing is rendered and no
     /// file is written.
     pub fn prepare(request: &RenderRequest) -> Result<Self, JobError> {
-        let mut scene = scene::load_scene_with(&request.scene, &request.overrides.defines)?;
+        let mut scene = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
         let resumed = match &request.resume {
             Some(path) => Some(film::read_checkpoint(path)?),
             None => None,

@@ -49,7 +49,7 @@ pub struct PhotonsReport {
 /// Traces the photons of `request`'s scene (on the current rayon pool) and
 /// writes them to its output atomically.
 pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError> {
-    let mut scene = scene::load_scene_with(&request.scene, &request.overrides.defines)?;
+    let mut scene = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
     request.overrides.apply(&mut scene, &request.scene)?;
     let accel_kind = request.accel.unwrap_or_else(AccelKind::default_kind);
     let options = AccelOptions {

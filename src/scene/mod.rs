@@ -7,6 +7,7 @@ pub mod compare;
 pub mod conductors;
 pub mod cutout;
 pub mod desc;
+pub mod gltf;
 pub mod ior;
 pub mod light;
 pub mod load;
@@ -40,12 +41,12 @@ pub use medium::Medium;
 /// True when [`load_scene`] reads `path` as caustic's own TOML (the other
 /// formats are chosen by extension).
 pub fn is_toml_path(path: &std::path::Path) -> bool {
-    !mitsuba::is_mitsuba_path(path)
+    !mitsuba::is_mitsuba_path(path) && !gltf::is_gltf_path(path)
 }
 
 /// Loads a scene file, choosing the format by extension: `.xml` is a
-/// Mitsuba scene (its warnings printed to stderr), anything else caustic's
-/// TOML.
+/// Mitsuba scene, `.gltf` and `.glb` a glTF 2.0 model (their warnings
+/// printed to stderr), anything else caustic's TOML.
 pub fn load_scene(path: &std::path::Path) -> Result<Scene, SceneError> {
     load_scene_with(path, &[])
 }
@@ -53,6 +54,41 @@ pub fn load_scene(path: &std::path::Path) -> Result<Scene, SceneError> {
 /// [`load_scene`] with `-D name=value` definitions for a Mitsuba scene's
 /// `$name` parameters (a TOML scene takes none).
 pub fn load_scene_with(path: &std::path::Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
+    load_scene_options(
+        path,
+        &LoadOptions {
+            defines: defines.to_vec(),
+            ..Default::default()
+        },
+    )
+}
+
+/// How a scene file is read: what the command line passes to the front ends.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// `-D name=value` definitions for a Mitsuba scene's `$name` parameters.
+    pub defines: Vec<(String, String)>,
+    /// A glTF model's options (`--camera`, `--allow-outside-files`).
+    pub gltf: gltf::GltfOptions,
+}
+
+/// [`load_scene`] with the command line's options.
+pub fn load_scene_options(path: &std::path::Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let defines = &options.defines;
+    if gltf::is_gltf_path(path) {
+        if let Some((name, _)) = defines.first() {
+            return Err(SceneError::Gltf {
+                path: path.into(),
+                pointer: String::new(),
+                message: format!("-D {name}=…: only Mitsuba scenes (.xml) take parameters"),
+            });
+        }
+        let loaded = gltf::load_gltf_scene(path, &options.gltf)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        return Ok(loaded.scene);
+    }
     if mitsuba::is_mitsuba_path(path) {
         let loaded = mitsuba::load_mitsuba_scene(path, defines)?;
         for w in &loaded.warnings {

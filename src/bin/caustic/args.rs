@@ -168,10 +168,29 @@ impl BackendArgs {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
+    /// A glTF model's camera to render, by name (the camera's or its
+    /// node's) or index (default: the first the scene places, else one
+    /// framing the model).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub camera: Option<String>,
+    /// Let a glTF model's buffers and images be read from outside its folder.
+    #[arg(long)]
+    pub allow_outside_files: bool,
+    /// A latitude-longitude environment image (.hdr or .exr) that lights
+    /// the scene, replacing its environment light (a glTF model without
+    /// lights is otherwise lit by a uniform white environment).
+    #[arg(long, value_name = "FILE")]
+    pub environment: Option<PathBuf>,
+    /// Multiplies the environment light's radiance (default 1).
+    #[arg(long, value_name = "SCALE")]
+    pub environment_intensity: Option<f32>,
+    /// Turns the environment image about the up axis (+y), in degrees.
+    #[arg(long, value_name = "DEGREES", allow_negative_numbers = true)]
+    pub environment_rotation: Option<f32>,
     /// PNG output (tone mapped). Default: <scene name>.png unless --exr alone is given.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -295,7 +314,7 @@ pub struct RenderArgs {
 
 #[derive(Args)]
 pub struct PhotonsArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -383,7 +402,7 @@ pub enum DebugView {
 
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -395,7 +414,7 @@ pub struct ConvertArgs {
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -408,7 +427,7 @@ pub struct InfoArgs {
 
 #[derive(Args)]
 pub struct CrosscheckArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -496,7 +515,7 @@ pub enum GatherArg {
 
 #[derive(Args)]
 pub struct ConvergeArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
@@ -666,7 +685,7 @@ pub const DEFAULT_A: &str = "brute";
 /// `caustic view`.
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene file: caustic TOML, or Mitsuba XML (`.xml`).
+    /// Scene file: caustic TOML, Mitsuba XML (`.xml`) or a glTF 2.0 model (`.gltf`, `.glb`).
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,

@@ -36,7 +36,7 @@ enum Command {
     Photons(PhotonsArgs),
     /// Print scene statistics, the accelerator build and the render plan.
     Info(InfoArgs),
-    /// Write any scene caustic reads (TOML, or Mitsuba XML with -D) as
+    /// Write any scene caustic reads (TOML, Mitsuba XML with -D, or a glTF model) as
     /// caustic TOML that loads back to the same scene; meshes built in
     /// memory go beside it as PLY files.
     Convert(ConvertArgs),

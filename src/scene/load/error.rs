@@ -124,6 +124,26 @@ pub enum SceneError {
         /// The mesh loader's error (names the mesh file and the place in it).
         error: Box<MeshError>,
     },
+    /// A glTF model that cannot be rendered: the message names the JSON
+    /// pointer (RFC 6901) of the offending value, e.g.
+    /// `/meshes/0/primitives/1/attributes/POSITION`.
+    #[error("{}: {}{message}", path.display(), pointer_prefix(pointer))]
+    Gltf {
+        /// The `.gltf` or `.glb` file.
+        path: PathBuf,
+        /// JSON pointer of the value at fault; empty for the whole file.
+        pointer: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+fn pointer_prefix(pointer: &str) -> String {
+    if pointer.is_empty() {
+        String::new()
+    } else {
+        format!("{pointer}: ")
+    }
 }
 
 fn list_or_none(names: &[String]) -> String {
@@ -145,14 +165,18 @@ impl SceneError {
             | SceneError::Toml { path, .. }
             | SceneError::Invalid { path, .. }
             | SceneError::UnknownMaterial { path, .. }
-            | SceneError::Mesh { path, .. } => path,
+            | SceneError::Mesh { path, .. }
+            | SceneError::Gltf { path, .. } => path,
         }
     }
 
     /// Line and column in the scene file, when the problem has one.
     pub fn place(&self) -> Option<Place> {
         match self {
-            SceneError::Read { .. } | SceneError::Directory { .. } | SceneError::TooLarge { .. } => None,
+            SceneError::Read { .. }
+            | SceneError::Directory { .. }
+            | SceneError::TooLarge { .. }
+            | SceneError::Gltf { .. } => None,
             SceneError::Toml { place, .. } => *place,
             SceneError::NotUtf8 { place, .. }
             | SceneError::Invalid { place, .. }
