@@ -38,6 +38,12 @@ impl Rng {
         Self(Pcg32::new(state, stream))
     }
 
+    /// The stream of PCG state `state` (stream 0), with no hashing: for a
+    /// placeholder that is never drawn from, or a fixed test stream.
+    pub fn from_state(state: u64) -> Self {
+        Self(Pcg32::new(state, 0))
+    }
+
     /// Stream for one sample of one pixel.
     pub fn for_pixel(seed: u64, pixel: u64, sample: u64) -> Self {
         Self::new(seed, Domain::Pixel, pixel, sample)

@@ -36,6 +36,65 @@ impl SamplerKind {
 
 const SOBOL_SAMPLES: u64 = 1 << 16;
 const SOBOL_DIMENSIONS: u32 = sobol_burley::NUM_DIMENSIONS;
+const SOBOL_SETS: usize = sobol_burley::NUM_DIMENSION_SETS_4D as usize;
+
+/// One dimension set's combined direction vectors: `[nibble][value][lane]`.
+type NibbleVectors = [[[u32; 4]; 16]; 4];
+
+/// The Sobol direction vectors of each set of four dimensions, combined a
+/// nibble of the (bit-reversed, 16-bit) sample index at a time: entry
+/// `[set][n][v]` is the XOR of the vectors that the bits of `v` select in
+/// nibble `n`. Four table reads then replace the crate's loop over the
+/// index's set bits (with its unpredictable trip count) and give the same
+/// bits. 64 KiB, built once.
+static NIBBLE_VECTORS: std::sync::LazyLock<Box<[NibbleVectors]>> = std::sync::LazyLock::new(|| {
+    (0..SOBOL_SETS)
+        .map(|set| {
+            std::array::from_fn(|n| {
+                std::array::from_fn(|v| {
+                    let index_rev = (v as u32) << (28 - 4 * n);
+                    sobol_burley::parts::sobol_int4_rev(index_rev, set as u32).into()
+                })
+            })
+        })
+        .collect()
+});
+
+/// Point `index_rev` (the scrambled, bit-reversed sample index) of
+/// dimension set `set`, Owen-scrambled under `seed`: bit for bit
+/// `sobol_burley::sample_4d`, with the index's scramble done once per
+/// sample by the caller.
+#[inline]
+fn sobol_4d(index_rev: u32, set: u32, seed: u32) -> [f32; 4] {
+    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
+    let table = &NIBBLE_VECTORS[set as usize];
+    let mut v = [0u32; 4];
+    for (n, nibbles) in table.iter().enumerate() {
+        let entry = &nibbles[((index_rev >> (28 - 4 * n)) & 15) as usize];
+        for lane in 0..4 {
+            v[lane] ^= entry[lane];
+        }
+    }
+    let sobol = Int4::from(v);
+    // As the crate: the multiply on `seed` avoids cancellation with `set`.
+    let scramble = {
+        let seed: Int4 = [seed.wrapping_mul(0x9c8f2d3b); 4].into();
+        let ds: Int4 = [set; 4].into();
+        seed ^ ds ^ [0x912f69ba, 0x174f18ab, 0x691e72ca, 0xb40cc1b8].into()
+    };
+    owen_scramble_int4_rev(sobol, hash_int4(scramble))
+        .reverse_bits()
+        .to_f32_norm()
+}
+
+/// The scrambled, bit-reversed index of sample `index` under `seed`, as
+/// `sobol_burley::sample_4d` shuffles it: the same for every dimension of
+/// the sample.
+#[inline]
+fn shuffled_index_rev(index: u32, seed: u32) -> u32 {
+    use sobol_burley::parts::{hash, owen_scramble_rev};
+    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c68e4a))
+}
 
 /// The numbers of one pixel sample.
 #[derive(Clone, Debug)]
@@ -43,6 +102,9 @@ pub struct Sampler {
     kind: SamplerKind,
     /// Scrambling seed of this pixel and block of samples.
     seed: u32,
+    /// Index within the block of 2¹⁶ samples, scrambled under `seed` and
+    /// bit-reversed (the first block of dimensions' shuffle).
+    index_rev: u32,
     /// Index within the block of 2¹⁶ samples.
     index: u32,
     /// Next dimension.
@@ -57,14 +119,23 @@ pub struct Sampler {
 impl Sampler {
     /// Sample `sample` of pixel `pixel` under `seed`.
     pub fn new(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Self {
-        let block = sample / SOBOL_SAMPLES;
-        Self {
-            kind,
-            seed: mix64(seed ^ mix64(pixel ^ mix64(block))) as u32,
-            index: (sample % SOBOL_SAMPLES) as u32,
-            dimension: 0,
-            batch: [0.0; 4],
-            rng: Rng::for_pixel(seed, pixel, sample),
+        match kind {
+            SamplerKind::Sobol => {
+                let block = sample / SOBOL_SAMPLES;
+                let scramble = mix64(seed ^ mix64(pixel ^ mix64(block))) as u32;
+                let index = (sample % SOBOL_SAMPLES) as u32;
+                Self {
+                    kind,
+                    seed: scramble,
+                    index_rev: shuffled_index_rev(index, scramble),
+                    index,
+                    dimension: 0,
+                    batch: [0.0; 4],
+                    // Never drawn from: Sobol draws every number.
+                    rng: Rng::from_state(0),
+                }
+            }
+            SamplerKind::Independent => Self::independent(Rng::for_pixel(seed, pixel, sample)),
         }
     }
 
@@ -73,6 +144,7 @@ impl Sampler {
         Self {
             kind: SamplerKind::Independent,
             seed: 0,
+            index_rev: 0,
             index: 0,
             dimension: 0,
             batch: [0.0; 4],
@@ -95,12 +167,13 @@ impl Sampler {
                 self.dimension += 1;
                 if d.is_multiple_of(4) {
                     let (block, set) = (d / SOBOL_DIMENSIONS, (d % SOBOL_DIMENSIONS) / 4);
-                    let seed = if block == 0 {
-                        self.seed
+                    self.batch = if block == 0 {
+                        sobol_4d(self.index_rev, set, self.seed)
                     } else {
-                        mix64(self.seed as u64 ^ mix64(block as u64)) as u32
+                        // Later blocks of dimensions: independently scrambled sequences.
+                        let seed = mix64(self.seed as u64 ^ mix64(block as u64)) as u32;
+                        sobol_4d(shuffled_index_rev(self.index, seed), set, seed)
                     };
-                    self.batch = sobol_burley::sample_4d(self.index, set, seed);
                 }
                 self.batch[(d % 4) as usize]
             }
@@ -155,6 +228,22 @@ mod tests {
         }
         let mean = sum / (4096.0 * 300.0);
         assert!((mean - 0.5).abs() < 0.005, "{mean}");
+    }
+
+    #[test]
+    fn table_sobol_matches_the_crate_bit_for_bit() {
+        for seed in [0u32, 1, 0x9e37_79b9, u32::MAX] {
+            for index in (0..1u32 << 16).step_by(97).chain([0, 1, 65535]) {
+                let rev = shuffled_index_rev(index, seed);
+                for set in 0..SOBOL_SETS as u32 {
+                    assert_eq!(
+                        sobol_4d(rev, set, seed).map(f32::to_bits),
+                        sobol_burley::sample_4d(index, set, seed).map(f32::to_bits),
+                        "seed {seed} index {index} set {set}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
