@@ -7,14 +7,15 @@ relMSE (epsilon 1e-2).
 Usage:
   python3.13 -m pip install bpy          # once: Blender as a module (Python 3.13 only)
   scripts/validate-cycles.py FILE.gltf|FILE.glb [...] [--blender PYTHON]
-      [--size 256] [--spp-caustic 256] [--spp-cycles 256] [--max-depth 16]
+      [--width 256] [--height 256] [--spp-caustic 256] [--spp-cycles 256] [--max-depth 64]
       [--out DIR] [--sun LUX] [--build-scene]
 
 Both renderers read one file. A file without a camera gets one written into
 a copy of it first (framing the bounding box Blender computes, 40° vertical
 field of view, looking down −z from slightly above), so that both see the
-same view. A file without lights is lit by the uniform environment caustic
-uses by default (radiance 1); Blender's world is set to the same. `--sun LUX`
+same view. A file without punctual lights is lit by the uniform environment
+caustic uses by default (radiance 1); Blender's world is set to the same
+(black otherwise). `--sun LUX`
 adds a `KHR_lights_punctual` directional light of that illuminance instead
 (from above and in front), which both convert at 683 lm/W, and a black world.
 
@@ -24,7 +25,8 @@ panel and a point light on a floor), then validates that file too.
 
 Cycles runs with its defaults for a physically based comparison: CPU, no
 denoising, no adaptive sampling, no clamping, no glossy blur, reflective and
-refractive caustics on, every bounce limit at --max-depth, a box pixel
+refractive caustics on, every bounce limit at --max-depth (caustic's glTF
+scenes have no cap: Russian roulette ends paths), a box pixel
 filter of one pixel, the Standard view transform (linear EXR output).
 """
 
@@ -318,8 +320,9 @@ def prepared(path, args, work):
         scene = doc.get("scene", 0)
         doc["scenes"][scene]["nodes"].append(len(doc["nodes"]) - 1)
         changed = True
-    has_lights = bool(doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights")) or any(
-        "emissiveFactor" in m and any(m["emissiveFactor"]) for m in doc.get("materials", []))
+    # caustic lights a model without punctual lights by a uniform
+    # environment of radiance 1 (docs/gltf.md); Blender's world matches.
+    has_lights = bool(doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights"))
     world = [0.0, 0.0, 0.0] if has_lights else [1.0, 1.0, 1.0]
     if args.sun is not None:
         ext = doc.setdefault("extensions", {}).setdefault("KHR_lights_punctual", {})
@@ -370,7 +373,8 @@ def main():
     p.add_argument("--height", type=int, default=256)
     p.add_argument("--spp-caustic", type=int, default=256)
     p.add_argument("--spp-cycles", type=int, default=256)
-    p.add_argument("--max-depth", type=int, default=16)
+    p.add_argument("--max-depth", type=int, default=64,
+                   help="Cycles' bounce limits (caustic's path integrator ends paths by Russian roulette)")
     p.add_argument("--sun", type=float, default=None, help="add a directional light of this many lux")
     p.add_argument("--build-scene", action="store_true")
     p.add_argument("--out", default="cycles-validation")
@@ -399,8 +403,7 @@ def main():
         cycles_seconds = json.load(open(result))["seconds"]
         exr = os.path.join(work, "caustic.exr")
         cmd = [args.caustic, "render", file, "-o", exr, "--integrator", "path",
-               "--spp", str(args.spp_caustic), "--width", str(args.width), "--height", str(args.height),
-               "--max-depth", str(args.max_depth)]
+               "--spp", str(args.spp_caustic), "--width", str(args.width), "--height", str(args.height)]
         start = time.time()
         out = subprocess.run(cmd, capture_output=True, text=True)
         if out.returncode != 0:

@@ -389,3 +389,40 @@ fn the_readme_scene_is_the_example_file_and_renders() {
     assert!(stdout(&o).contains("photon pass: 20000 emitted"), "{}", stdout(&o));
     assert!(png.is_file());
 }
+
+/// `-o NAME.exr` writes the linear EXR (not a PNG under an EXR name), and
+/// naming two EXRs at once is refused.
+#[test]
+fn an_exr_name_after_o_writes_the_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shot.exr");
+    let scene = repo("scenes/test/shadow.toml");
+    let o = caustic(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--spp",
+        "1",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(&bytes[..4], &[0x76, 0x2f, 0x31, 0x01], "OpenEXR magic number");
+    assert!(!dir.path().join("shadow.png").exists());
+    let other = dir.path().join("other.exr");
+    let o = caustic(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--exr",
+        other.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("give one of them"), "{}", stderr(&o));
+}

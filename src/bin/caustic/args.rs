@@ -191,7 +191,8 @@ pub struct RenderArgs {
     /// Turns the environment image about the up axis (+y), in degrees.
     #[arg(long, value_name = "DEGREES", allow_negative_numbers = true)]
     pub environment_rotation: Option<f32>,
-    /// PNG output (tone mapped). Default: <scene name>.png unless --exr alone is given.
+    /// PNG output (tone mapped), or the EXR output (linear HDR) when the
+    /// name ends in .exr. Default: <scene name>.png unless --exr alone is given.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// EXR output (linear HDR).

@@ -18,7 +18,20 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         )));
     }
     let shard = shard_request(&args)?;
-    let png = match (&args.output, &args.exr) {
+    // `-o NAME.exr` asks for the linear EXR, not a PNG under that name.
+    let is_exr = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let (output, exr) = match (&args.output, &args.exr) {
+        (Some(o), Some(e)) if shard.is_none() && is_exr(o) => {
+            return Err(bad_input(anyhow::anyhow!(
+                "-o {} and --exr {}: -o names the EXR when it ends in .exr; give one of them",
+                o.display(),
+                e.display()
+            )));
+        }
+        (Some(o), None) if shard.is_none() && is_exr(o) => (None, Some(o.clone())),
+        _ => (args.output.clone(), args.exr.clone()),
+    };
+    let png = match (&output, &exr) {
         _ if shard.is_some() => None,
         (Some(p), _) => Some(p.clone()),
         (None, Some(_)) => None,
@@ -60,7 +73,7 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
         embree_quality: args.accel.backend.embree_quality.name().into(),
         embree_robust: args.accel.backend.embree_robust,
         png,
-        exr: args.exr.clone(),
+        exr,
         checkpoint: match &shard {
             // A shard's partial is its checkpoint: -o, or the resumed file.
             Some(_) => args.output.clone().or_else(|| args.resume.clone()),
