@@ -6,6 +6,7 @@ relMSE (epsilon 1e-2).
 
 Usage:
   python3.13 -m pip install bpy          # once: Blender as a module (Python 3.13 only)
+  python3 -m pip install mitsuba numpy   # reads caustic's multi-channel EXR
   scripts/validate-cycles.py FILE.gltf|FILE.glb [...] [--blender PYTHON]
       [--width 256] [--height 256] [--spp-caustic 256] [--spp-cycles 256] [--max-depth 64]
       [--out DIR] [--sun LUX] [--build-scene]
@@ -341,6 +342,21 @@ def prepared(path, args, work):
     return path, world
 
 
+def read_caustic_exr(path):
+    """The R, G, B channels of caustic's EXR (which also holds its AOVs,
+    read here with Mitsuba's EXR reader)."""
+    import numpy as np
+    try:
+        import mitsuba as mi
+    except ImportError:
+        sys.exit("reading caustic's EXR needs mitsuba: python3 -m pip install mitsuba")
+    mi.set_variant("scalar_rgb")
+    b = mi.Bitmap(path)
+    names = [b.struct_()[i].name for i in range(b.channel_count())]
+    px = np.array(b, copy=False).reshape(b.height(), b.width(), b.channel_count())
+    return np.stack([px[..., names.index(c)] for c in ("R", "G", "B")], axis=-1).astype(np.float64)
+
+
 def compare(ours, theirs):
     import numpy as np
     eps = 1e-2
@@ -402,15 +418,14 @@ def main():
             "world": world})
         cycles_seconds = json.load(open(result))["seconds"]
         exr = os.path.join(work, "caustic.exr")
-        cmd = [args.caustic, "render", file, "-o", exr, "--integrator", "path",
+        cmd = [args.caustic, "render", file, "--exr", exr, "--integrator", "path",
                "--spp", str(args.spp_caustic), "--width", str(args.width), "--height", str(args.height)]
         start = time.time()
         out = subprocess.run(cmd, capture_output=True, text=True)
         if out.returncode != 0:
             sys.exit(f"caustic failed: {' '.join(cmd)}\n{out.stderr}")
         caustic_seconds = time.time() - start
-        run_blender(args.blender, {"kind": "npy", "exr": exr, "npy": os.path.join(work, "caustic.npy")})
-        ours = np.load(os.path.join(work, "caustic.npy")).astype(np.float64)
+        ours = read_caustic_exr(exr)
         theirs = np.load(os.path.join(work, "cycles.npy")).astype(np.float64)
         rel, mean, blocks = compare(ours, theirs)
         flat = [b for row in blocks for b in row if not math.isnan(b)]
