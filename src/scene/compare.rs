@@ -90,36 +90,7 @@ fn medium(scene: &Scene, i: Option<u32>) -> Option<&HomogeneousMedium> {
 fn comparable(m: &Material) -> Material {
     let mut m = m.clone();
     if let Some(t) = &mut m.textures {
-        let slots = [
-            &mut t.ambient,
-            &mut t.diffuse,
-            &mut t.specular,
-            &mut t.shininess,
-            &mut t.mirror_reflectivity,
-            &mut t.mirror_tint,
-            &mut t.dielectric_tint,
-            &mut t.dielectric_roughness,
-            &mut t.conductor_roughness,
-            &mut t.roughness_v,
-            &mut t.principled_metallic,
-            &mut t.principled_roughness,
-            &mut t.principled_transmission,
-            &mut t.principled_clearcoat,
-            &mut t.principled_clearcoat_roughness,
-            &mut t.emission,
-        ];
-        for slot in slots.into_iter().flatten() {
-            unnamed(slot);
-        }
-        if let Some(n) = &mut t.normal_map {
-            unnamed(&mut n.texture);
-        }
-        if let Some(b) = &mut t.bump_map {
-            unnamed(&mut b.texture);
-        }
-        if let Some(a) = &mut t.alpha {
-            unnamed(&mut a.texture);
-        }
+        t.all_mut().for_each(unnamed);
     }
     if let Some(b) = &mut m.blend {
         if let Some(w) = &mut b.weight_texture {

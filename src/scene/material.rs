@@ -472,6 +472,41 @@ pub struct MaterialTextures {
     pub alpha: Option<AlphaMask>,
 }
 
+/// The value slots of [`MaterialTextures`] with their parameter names, by
+/// reference (`&`) or mutably (`&mut`): the one list of them.
+macro_rules! value_slots {
+    ($t:expr, $($r:tt)+) => {
+        [
+            ("ambient", $($r)+ $t.ambient),
+            ("diffuse", $($r)+ $t.diffuse),
+            ("specular", $($r)+ $t.specular),
+            ("shininess", $($r)+ $t.shininess),
+            ("mirror.reflectivity", $($r)+ $t.mirror_reflectivity),
+            ("mirror.tint", $($r)+ $t.mirror_tint),
+            ("dielectric.tint", $($r)+ $t.dielectric_tint),
+            ("dielectric.roughness", $($r)+ $t.dielectric_roughness),
+            ("conductor.roughness", $($r)+ $t.conductor_roughness),
+            ("roughness_v", $($r)+ $t.roughness_v),
+            ("principled.metallic", $($r)+ $t.principled_metallic),
+            ("principled.roughness", $($r)+ $t.principled_roughness),
+            ("principled.transmission", $($r)+ $t.principled_transmission),
+            ("principled.clearcoat", $($r)+ $t.principled_clearcoat),
+            ("principled.clearcoat_roughness", $($r)+ $t.principled_clearcoat_roughness),
+            ("disney.roughness", $($r)+ $t.disney_roughness),
+            ("disney.anisotropic", $($r)+ $t.disney_anisotropic),
+            ("disney.metallic", $($r)+ $t.disney_metallic),
+            ("disney.spec_trans", $($r)+ $t.disney_spec_trans),
+            ("disney.spec_tint", $($r)+ $t.disney_spec_tint),
+            ("disney.sheen", $($r)+ $t.disney_sheen),
+            ("disney.sheen_tint", $($r)+ $t.disney_sheen_tint),
+            ("disney.flatness", $($r)+ $t.disney_flatness),
+            ("disney.clearcoat", $($r)+ $t.disney_clearcoat),
+            ("disney.clearcoat_gloss", $($r)+ $t.disney_clearcoat_gloss),
+            ("emission", $($r)+ $t.emission),
+        ]
+    };
+}
+
 impl MaterialTextures {
     /// True when some parameter's value depends on the shading point.
     #[inline]
@@ -481,36 +516,9 @@ impl MaterialTextures {
 
     /// The value textures that are set, with their parameter names.
     pub fn values(&self) -> impl Iterator<Item = (&'static str, &Texture)> {
-        [
-            ("ambient", &self.ambient),
-            ("diffuse", &self.diffuse),
-            ("specular", &self.specular),
-            ("shininess", &self.shininess),
-            ("mirror.reflectivity", &self.mirror_reflectivity),
-            ("mirror.tint", &self.mirror_tint),
-            ("dielectric.tint", &self.dielectric_tint),
-            ("dielectric.roughness", &self.dielectric_roughness),
-            ("conductor.roughness", &self.conductor_roughness),
-            ("roughness_v", &self.roughness_v),
-            ("principled.metallic", &self.principled_metallic),
-            ("principled.roughness", &self.principled_roughness),
-            ("principled.transmission", &self.principled_transmission),
-            ("principled.clearcoat", &self.principled_clearcoat),
-            ("principled.clearcoat_roughness", &self.principled_clearcoat_roughness),
-            ("disney.roughness", &self.disney_roughness),
-            ("disney.anisotropic", &self.disney_anisotropic),
-            ("disney.metallic", &self.disney_metallic),
-            ("disney.spec_trans", &self.disney_spec_trans),
-            ("disney.spec_tint", &self.disney_spec_tint),
-            ("disney.sheen", &self.disney_sheen),
-            ("disney.sheen_tint", &self.disney_sheen_tint),
-            ("disney.flatness", &self.disney_flatness),
-            ("disney.clearcoat", &self.disney_clearcoat),
-            ("disney.clearcoat_gloss", &self.disney_clearcoat_gloss),
-            ("emission", &self.emission),
-        ]
-        .into_iter()
-        .filter_map(|(name, t)| t.as_ref().map(|t| (name, t)))
+        value_slots!(self, &)
+            .into_iter()
+            .filter_map(|(name, t)| t.as_ref().map(|t| (name, t)))
     }
 
     /// Every texture, the normal map's and the mask's included.
@@ -519,6 +527,19 @@ impl MaterialTextures {
             .chain(self.normal_map.as_ref().map(|n| ("normal_map", &n.texture)))
             .chain(self.bump_map.as_ref().map(|b| ("bump_map", &b.texture)))
             .chain(self.alpha.as_ref().map(|a| ("alpha", &a.texture)))
+    }
+
+    /// [`all`](Self::all), mutable: every texture that is set.
+    pub fn all_mut(&mut self) -> impl Iterator<Item = &mut Texture> {
+        let maps = [
+            self.normal_map.as_mut().map(|n| &mut n.texture),
+            self.bump_map.as_mut().map(|b| &mut b.texture),
+            self.alpha.as_mut().map(|a| &mut a.texture),
+        ];
+        value_slots!(self, &mut)
+            .into_iter()
+            .filter_map(|(_, t)| t.as_mut())
+            .chain(maps.into_iter().flatten())
     }
 
     /// True when the material reads texture coordinates or the tangent

@@ -6,7 +6,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{HomogeneousMedium, Material, MaterialTextures, Scene, Shape};
+use caustic::scene::{HomogeneousMedium, Material, Scene, Shape};
 use caustic::texture::Texture;
 use std::sync::Arc;
 
@@ -35,34 +35,7 @@ fn comparable(m: &Material, names: Names) -> Material {
         m.name.clear();
     }
     if let Some(t) = &mut m.textures {
-        let t: &mut MaterialTextures = t;
-        for slot in [
-            &mut t.ambient,
-            &mut t.diffuse,
-            &mut t.specular,
-            &mut t.shininess,
-            &mut t.mirror_reflectivity,
-            &mut t.mirror_tint,
-            &mut t.dielectric_tint,
-            &mut t.dielectric_roughness,
-            &mut t.conductor_roughness,
-            &mut t.roughness_v,
-            &mut t.emission,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            image(slot);
-        }
-        if let Some(n) = &mut t.normal_map {
-            image(&mut n.texture);
-        }
-        if let Some(b) = &mut t.bump_map {
-            image(&mut b.texture);
-        }
-        if let Some(a) = &mut t.alpha {
-            image(&mut a.texture);
-        }
+        t.all_mut().for_each(image);
     }
     if let Some(b) = &mut m.blend {
         if let Some(w) = &mut b.weight_texture {
