@@ -162,3 +162,24 @@ fn mitsuba_seeds_load() {
     }
     assert!(seeds >= 10, "{seeds} seeds");
 }
+
+#[test]
+fn gltf_inputs() {
+    let files = inputs("gltf");
+    assert!(!files.is_empty(), "no kept inputs for gltf");
+    let dir = tempfile::tempdir().unwrap();
+    for path in files {
+        let bytes = std::fs::read(&path).unwrap();
+        // As the target does: a .glb when the bytes say so, else a .gltf.
+        let name = if bytes.starts_with(b"glTF") {
+            "model.glb"
+        } else {
+            "model.gltf"
+        };
+        let model = dir.path().join(name);
+        std::fs::write(&model, &bytes).unwrap();
+        let started = Instant::now();
+        let result = caustic::scene::gltf::load_gltf_scene(&model, &Default::default());
+        check(&path, started, result);
+    }
+}

@@ -242,7 +242,16 @@ pub(super) fn mikktspace_tangents(mesh: &Mesh) -> Vec<Vec4> {
         mesh,
         sums: vec![Vec4::new(0.0, 0.0, 0.0, 1.0); mesh.positions.len()],
     };
-    mikktspace::generate_tangents(&mut m);
+    // The mikktspace crate reads freed memory when every triangle is
+    // degenerate (two corners at the same position, its own test): its
+    // count of the others underflows. Such a mesh has no tangents to find.
+    let proper = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].to_array());
+        a != b && a != c && b != c
+    };
+    if mesh.triangles.iter().any(proper) {
+        mikktspace::generate_tangents(&mut m);
+    }
     m.sums
         .iter()
         .zip(&mesh.normals)
