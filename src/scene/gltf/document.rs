@@ -136,6 +136,28 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), SceneError> {
             }
         }
     }
+    // An image's source, which gltf-json leaves unchecked (and the gltf
+    // crate unwraps): a `uri` or a `bufferView`, the latter with its
+    // `mimeType` (glTF 2.0 §5.18).
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (None, None, _) => {
+                return Err(error(
+                    path,
+                    format!("/images/{i}"),
+                    "an image needs a `uri` or a `bufferView`",
+                ));
+            }
+            (_, Some(_), None) => {
+                return Err(error(
+                    path,
+                    format!("/images/{i}/mimeType"),
+                    "required with a `bufferView`",
+                ));
+            }
+            _ => {}
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |p, e| errors.push((p(), e)));
     // POSITION's `min` and `max` are required by the specification but
