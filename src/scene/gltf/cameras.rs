@@ -96,7 +96,13 @@ pub(super) fn choose(
         }
     };
     let Some(placed) = placed else {
-        *camera = framing(scene, settings.width as f32 / settings.height as f32);
+        *camera = framing(scene, settings.width as f32 / settings.height as f32).ok_or_else(|| {
+            ctx.error(
+                "",
+                "the model's bounds are too large to frame with a camera (its positions reach single \
+                 precision's limits): give the file a camera",
+            )
+        })?;
         return Ok(true);
     };
     let pointer = format!("/cameras/{}", placed.item);
@@ -147,8 +153,9 @@ pub(super) fn choose(
 /// A camera that frames the scene's bounds as model viewers do: from the
 /// model's front (+z, glTF's forward) raised by
 /// [`DEFAULT_FRAMING_ELEVATION_DEG`], far enough that the bounding sphere
-/// fits the narrower field of view of an image of aspect `aspect`.
-pub fn framing(scene: &Scene, aspect: f32) -> Camera {
+/// fits the narrower field of view of an image of aspect `aspect`; `None`
+/// when the bounds are too large for single precision to place it.
+pub fn framing(scene: &Scene, aspect: f32) -> Option<Camera> {
     let b = scene.bounds();
     let (centre, radius) = if b.is_empty() {
         (Vec3A::ZERO, 1.0)
@@ -161,5 +168,9 @@ pub fn framing(scene: &Scene, aspect: f32) -> Camera {
     let distance = radius / half.sin();
     let e = DEFAULT_FRAMING_ELEVATION_DEG.to_radians();
     let dir = Vec3A::new(0.0, e.sin(), e.cos());
-    Camera::new(centre + dir * distance, centre, Vec3A::Y, DEFAULT_FRAMING_FOV_DEG).expect("a valid framing camera")
+    let eye = centre + dir * distance;
+    if !(eye.is_finite() && centre.is_finite()) {
+        return None;
+    }
+    Camera::new(eye, centre, Vec3A::Y, DEFAULT_FRAMING_FOV_DEG)
 }
