@@ -212,15 +212,7 @@ impl RoughDielectric {
             }
             wi
         };
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let mut s = BsdfSample::glossy(wi, self.eval(wo, wi, transport), pdf);
-        if wi.z * wo.z < 0.0 {
-            s.transmission = true;
-            s.eta = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
-        }
-        Some(s)
+        let eta = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
+        BsdfSample::scattered(wo, wi, self.pdf(wo, wi), || self.eval(wo, wi, transport), eta)
     }
 }

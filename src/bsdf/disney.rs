@@ -239,16 +239,8 @@ impl Disney {
         if !compatible_and_sided {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let mut s = BsdfSample::glossy(wi, self.eval(wo, wi, transport), pdf);
-        if wi.z * wo.z < 0.0 {
-            s.transmission = true;
-            s.eta = if front { self.params.eta } else { 1.0 / self.params.eta };
-        }
-        Some(s)
+        let eta = if front { self.params.eta } else { 1.0 / self.params.eta };
+        BsdfSample::scattered(wo, wi, self.pdf(wo, wi), || self.eval(wo, wi, transport), eta)
     }
 
     /// The base colour over its luminance (white when black).

@@ -90,6 +90,22 @@ impl BsdfSample {
         }
     }
 
+    /// A sampled direction `wi` of a non-delta lobe with density `pdf` and
+    /// value `f()` (evaluated only when the density is positive), through
+    /// the surface with index ratio `eta` when `wi` is on the other side of
+    /// it from `wo`.
+    fn scattered(wo: Vec3A, wi: Vec3A, pdf: f32, f: impl FnOnce() -> Vec3A, eta: f32) -> Option<Self> {
+        if pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        let mut s = Self::glossy(wi, f(), pdf);
+        if wi.z * wo.z < 0.0 {
+            s.transmission = true;
+            s.eta = eta;
+        }
+        Some(s)
+    }
+
     /// The throughput factor `f |cos θi| / pdf`.
     pub fn weight(&self) -> Vec3A {
         if self.pdf > 0.0 {

@@ -365,16 +365,9 @@ impl Principled {
             },
             _ => cosine_hemisphere(u),
         };
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let mut sample = BsdfSample::glossy(wi, self.eval(wo, wi, transport), pdf);
-        if wi.z < 0.0 {
-            sample.transmission = true;
-            sample.eta = if self.thin { 1.0 } else { self.eta };
-        }
-        Some(sample)
+        // Here `wo` is outside (wo.z > 0).
+        let eta = if self.thin { 1.0 } else { self.eta };
+        BsdfSample::scattered(wo, wi, self.pdf(wo, wi), || self.eval(wo, wi, transport), eta)
     }
 
     /// The delta reflection's weight from `wo` (what a mirror-like
