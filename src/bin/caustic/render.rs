@@ -19,7 +19,6 @@ pub fn run_render(args: RenderArgs) -> Result<(), Failure> {
     }
     let shard = shard_request(&args)?;
     // `-o NAME.exr` asks for the linear EXR, not a PNG under that name.
-    let is_exr = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     let (output, exr) = match (&args.output, &args.exr) {
         (Some(o), Some(e)) if shard.is_none() && is_exr(o) => {
             return Err(bad_input(anyhow::anyhow!(
@@ -126,7 +125,6 @@ fn shard_request(args: &RenderArgs) -> Result<Option<Option<ShardSet>>, Failure>
                  --exr and --checkpoint do not apply; merge the partials with caustic merge"
             )));
         }
-        let is_exr = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         if let Some(out) = args.output.as_ref().filter(|p| !is_exr(p)) {
             return Err(bad_input(anyhow::anyhow!(
                 "-o {}: a shard writes its partial as an EXR: name it PART.exr (merge the partials into a PNG \
@@ -367,4 +365,9 @@ fn render_job(job: RenderJob, args: &RenderArgs, interrupt: &job::Interrupt) -> 
         });
     }
     Ok(())
+}
+
+/// True when `p` names an EXR file.
+fn is_exr(p: &std::path::Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
