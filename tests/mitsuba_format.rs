@@ -504,3 +504,27 @@ fn a_large_scene_reads_in_linear_time() {
     assert_eq!(scene.objects.len(), 40_000);
     assert!(start.elapsed().as_secs_f64() < 60.0, "{:?}", start.elapsed());
 }
+
+/// The scene builder's check of what a material needs from a shape names
+/// the `<shape>` at fault, whichever format the scene is written in.
+#[test]
+fn a_normal_map_on_a_mesh_without_texture_coordinates_names_the_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let scene = r#"<scene version="3.0.0">
+    <sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>
+    <shape type="obj">
+        <string name="filename" value="tri.obj"/>
+        <bsdf type="normalmap">
+            <texture name="normalmap" type="checkerboard"/>
+            <bsdf type="diffuse"/>
+        </bsdf>
+    </shape>
+</scene>"#;
+    let path = write(dir.path(), "scene.xml", scene);
+    let e = load_mitsuba_scene(&path, &[]).unwrap_err().to_string();
+    assert!(
+        e.contains("scene.xml:3:5: ") && e.contains("has a normal map") && e.contains("no texture coordinates"),
+        "{e}"
+    );
+}

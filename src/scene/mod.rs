@@ -2,6 +2,7 @@
 //! (`Send + Sync`), plus the surface query that turns an accelerator's `Hit`
 //! into shading data.
 
+pub mod builder;
 pub mod camera;
 pub mod compare;
 pub mod conductors;
@@ -26,6 +27,7 @@ use std::sync::Arc;
 
 pub use crate::geometry::{Cylinder, Disk, Mesh, Quad, Sphere};
 pub use crate::geometry::{WaterSurface, Wave};
+pub use builder::{Origin, SceneBuilder};
 pub use camera::{Camera, FovAxis};
 pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};

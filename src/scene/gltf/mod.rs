@@ -24,7 +24,7 @@ mod nodes;
 mod textures;
 
 use crate::scene::load::SceneError;
-use crate::scene::{IntegratorKind, Light, Media, RenderSettings, Scene};
+use crate::scene::{IntegratorKind, Light, Media, Origin, RenderSettings, Scene, SceneBuilder};
 use crate::texture::{ColourSpace, Image};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -119,21 +119,34 @@ pub fn load_gltf_scene(path: &Path, options: &GltfOptions) -> Result<GltfScene, 
         list: built.media,
         camera: None,
     };
-    let mut scene = Scene {
-        settings: RenderSettings::default(),
-        camera: cameras::placeholder(),
-        materials: built.materials,
-        lights,
-        meshes: built.meshes,
-        objects: built.objects,
-        media,
-    };
-    if scene.objects.is_empty() {
+    let mut builder = SceneBuilder::new(path);
+    for (material, origin) in built.materials {
+        builder.add_material(material, origin);
+    }
+    for mesh in built.meshes {
+        builder.add_mesh(mesh);
+    }
+    if built.objects.is_empty() {
         return Err(ctx.error(
             "",
             "the model has no triangle to render (no node of its scene places a mesh)",
         ));
     }
+    for (object, origin) in built.objects {
+        builder.add_object(object, origin);
+    }
+    for light in lights {
+        let pointer = if matches!(light, Light::Environment { .. }) {
+            ""
+        } else {
+            "/extensions/KHR_lights_punctual/lights"
+        };
+        builder.add_light(light, ctx.origin(pointer));
+    }
+    builder.set_media(media);
+    // The camera may frame the scene's bounds: it is chosen once the scene is built.
+    builder.set_camera(cameras::placeholder());
+    let mut scene = builder.build()?;
     let mut camera = cameras::placeholder();
     let framed_camera = cameras::choose(&ctx, &graph, &scene, &mut settings, &mut camera)?;
     scene.camera = camera;
@@ -172,6 +185,14 @@ impl Ctx<'_> {
             path: self.path.to_path_buf(),
             pointer: pointer.into(),
             message: message.into(),
+        }
+    }
+
+    /// The value at `pointer` as the origin of a part of the scene.
+    fn origin(&self, pointer: impl Into<String>) -> Origin {
+        Origin::Json {
+            path: self.path.to_path_buf(),
+            pointer: pointer.into(),
         }
     }
 

@@ -9,6 +9,7 @@ use super::meshes;
 use super::Ctx;
 use crate::geometry::Mesh;
 use crate::scene::load::SceneError;
+use crate::scene::Origin;
 use crate::scene::{HomogeneousMedium, Material, MediumInterface, Object, Shape};
 use glam::{Affine3A, Mat4};
 use std::collections::HashMap;
@@ -107,9 +108,11 @@ pub(super) fn walk(ctx: &mut Ctx) -> Result<Graph, SceneError> {
 
 /// The scene's geometry, materials and media.
 pub(super) struct BuiltScene {
-    pub materials: Vec<Material>,
+    /// The materials, each with its JSON pointer.
+    pub materials: Vec<(Material, Origin)>,
     pub meshes: Vec<Arc<Mesh>>,
-    pub objects: Vec<Object>,
+    /// The objects, each with the pointer of its primitive.
+    pub objects: Vec<(Object, Origin)>,
     pub media: Vec<HomogeneousMedium>,
     /// Per object, the media on its sides.
     pub interfaces: Vec<MediumInterface>,
@@ -166,7 +169,8 @@ pub(super) fn build(ctx: &mut Ctx, graph: &Graph) -> Result<BuiltScene, SceneErr
                             normal_mapped: false,
                         },
                     };
-                    out.materials.push(material);
+                    let pointer = key.map_or_else(String::new, |k| format!("/materials/{k}"));
+                    out.materials.push((material, ctx.origin(pointer)));
                     let medium = medium.map(|m| {
                         out.media.push(m);
                         (out.media.len() - 1) as u32
@@ -204,11 +208,11 @@ pub(super) fn build(ctx: &mut Ctx, graph: &Graph) -> Result<BuiltScene, SceneErr
                 // The map cannot be applied without texture coordinates:
                 // this mesh gets a copy of the material without it.
                 material = *stripped.entry(key).or_insert_with(|| {
-                    let mut m = out.materials[slot.index as usize].clone();
+                    let (mut m, origin) = out.materials[slot.index as usize].clone();
                     if let Some(t) = m.textures.as_deref_mut() {
                         t.normal_map = None;
                     }
-                    out.materials.push(m);
+                    out.materials.push((m, origin));
                     (out.materials.len() - 1) as u32
                 });
             }
@@ -217,7 +221,7 @@ pub(super) fn build(ctx: &mut Ctx, graph: &Graph) -> Result<BuiltScene, SceneErr
                 .nth(placed.node)
                 .and_then(|n| n.name().map(str::to_string))
                 .unwrap_or_else(|| format!("node {}", placed.node));
-            out.objects.push(Object {
+            let object = Object {
                 name: format!("{node_name}#{}", prim.index()),
                 shape: Shape::Mesh {
                     mesh: mesh_index,
@@ -225,7 +229,9 @@ pub(super) fn build(ctx: &mut Ctx, graph: &Graph) -> Result<BuiltScene, SceneErr
                     smooth,
                 },
                 material,
-            });
+            };
+            let origin = ctx.origin(format!("/meshes/{}/primitives/{}", mesh.index(), prim.index()));
+            out.objects.push((object, origin));
             out.interfaces.push(MediumInterface {
                 interior: slot.medium,
                 exterior: None,

@@ -124,6 +124,14 @@ pub enum SceneError {
         /// The mesh loader's error (names the mesh file and the place in it).
         error: Box<MeshError>,
     },
+    /// A problem of the scene as a whole, with no one place in the file.
+    #[error("{}: {message}", path.display())]
+    Scene {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// A glTF model that cannot be rendered: the message names the JSON
     /// pointer (RFC 6901) of the offending value, e.g.
     /// `/meshes/0/primitives/1/attributes/POSITION`.
@@ -166,6 +174,7 @@ impl SceneError {
             | SceneError::Invalid { path, .. }
             | SceneError::UnknownMaterial { path, .. }
             | SceneError::Mesh { path, .. }
+            | SceneError::Scene { path, .. }
             | SceneError::Gltf { path, .. } => path,
         }
     }
@@ -176,6 +185,7 @@ impl SceneError {
             SceneError::Read { .. }
             | SceneError::Directory { .. }
             | SceneError::TooLarge { .. }
+            | SceneError::Scene { .. }
             | SceneError::Gltf { .. } => None,
             SceneError::Toml { place, .. } => *place,
             SceneError::NotUtf8 { place, .. }

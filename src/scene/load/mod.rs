@@ -36,7 +36,7 @@ pub use settings::{DEFAULT_VFOV_DEG, MAX_DEPTH, MAX_EXPOSURE_STOPS, MAX_PHOTON_G
 
 use crate::geometry::water::WaterSurface;
 use crate::scene::desc::{IntegratorName, ObjectKind, SceneDesc};
-use crate::scene::{Object, Scene, Shape};
+use crate::scene::{Object, Origin, Scene, SceneBuilder, Shape};
 use ctx::Ctx;
 use std::io::Read;
 use std::path::Path;
@@ -168,39 +168,37 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         }
         meshes.push(Arc::new(mesh));
     }
-    // A normal map needs a tangent frame from texture coordinates.
-    for (i, o) in objects.iter().enumerate() {
-        if let Shape::Mesh { mesh, .. } = &o.shape {
-            let material = &materials[o.material as usize];
-            let mesh = &meshes[*mesh as usize];
-            let bumped = material.textures.as_ref().is_some_and(|t| t.bump_map.is_some());
-            if (bumped && mesh.uvs.is_empty())
-                || (material.textures.as_ref().is_some_and(|t| t.normal_map.is_some())
-                    && mesh.uvs.is_empty()
-                    && mesh.tangents.is_empty())
-            {
-                return Err(ctx.invalid(
-                    desc.objects[i].material.span(),
-                    format!(
-                        "material `{}` has a {} map, but mesh `{}` has no texture coordinates to orient it",
-                        material.name,
-                        if bumped { "bump" } else { "normal" },
-                        mesh.name
-                    ),
-                ));
-            }
+    // The parts, with their places, checked together by the builder.
+    let text_origin = |span: std::ops::Range<usize>| Origin::Text {
+        path: path.into(),
+        place: ctx.place(span),
+    };
+    let mut builder = SceneBuilder::new(path);
+    let mut material_origins = vec![Origin::File { path: path.into() }; materials.len()];
+    // A material's origin is where the first object using it names it.
+    for o in desc.objects.iter().rev() {
+        if let Some(&m) = material_index.get(o.material.get_ref().as_str()) {
+            material_origins[m as usize] = text_origin(o.material.span());
         }
     }
-    let media = ctx.scene_media(&desc, desc.render.integrator == Some(IntegratorName::Volpath))?;
-    let mut scene = Scene {
-        media,
-        settings,
-        camera,
-        materials,
-        lights,
-        meshes,
-        objects,
-    };
+    for (material, origin) in materials.into_iter().zip(material_origins) {
+        builder.add_material(material, origin);
+    }
+    for mesh in meshes {
+        builder.add_mesh(mesh);
+    }
+    // An object's origin is its `material` key: what the builder checks of
+    // an object is what its material needs from its shape.
+    for (object, o) in objects.into_iter().zip(&desc.objects) {
+        builder.add_object(object, text_origin(o.material.span()));
+    }
+    for (light, l) in lights.into_iter().zip(&desc.lights) {
+        builder.add_light(light, text_origin(l.kind.span()));
+    }
+    builder.set_media(ctx.scene_media(&desc, desc.render.integrator == Some(IntegratorName::Volpath))?);
+    builder.set_camera(camera);
+    builder.set_settings(settings);
+    let mut scene = builder.build()?;
     if let Some(m) = &desc.medium {
         scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(i, w)| (*i, w)), scene.bounds())?);
     }

@@ -117,7 +117,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
                 media_handling = sensor::integrator(&Plugin::new(e, &ids)?, &mut settings, &mut warnings)?;
             }
             "shape" => b.shape(&Plugin::new(e, &ids)?)?,
-            "emitter" => lights.push(b.emitter(&Plugin::new(e, &ids)?)?),
+            "emitter" => lights.push((b.emitter(&Plugin::new(e, &ids)?)?, e.origin.part())),
             // Definitions, used through <ref>.
             "bsdf" | "texture" | "spectrum" | "rfilter" | "film" | "sampler" => {}
             "medium" | "phase" | "volume" => {
@@ -138,7 +138,12 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
             .origin
             .error("the scene has no <sensor>: caustic needs a camera")
     })?;
-    if lights.iter().filter(|l| matches!(l, Light::Environment { .. })).count() > 1 {
+    if lights
+        .iter()
+        .filter(|(l, _)| matches!(l, Light::Environment { .. }))
+        .count()
+        > 1
+    {
         return Err(doc
             .root
             .origin
@@ -181,34 +186,30 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
             }
         }
     };
-    for o in &mut objects {
+    // A `.serialized` shape's flags may ask for face normals.
+    for (o, _) in &mut objects {
         if let Shape::Mesh { mesh, smooth, .. } = &mut o.shape {
-            // A `.serialized` shape's flags may ask for face normals.
             *smooth &= !meshes.face_normals[*mesh as usize];
-            let material = &materials[o.material as usize];
-            let mesh = &meshes.meshes[*mesh as usize];
-            if material
-                .textures
-                .as_ref()
-                .is_some_and(|t| t.normal_map.is_some() || t.bump_map.is_some())
-                && mesh.uvs.is_empty()
-            {
-                return Err(doc.root.origin.error(format!(
-                    "shape `{}` has a normal or bump map, but its mesh `{}` has no texture coordinates",
-                    o.name, mesh.name
-                )));
-            }
         }
     }
-    let scene = Scene {
-        settings,
-        camera: sensor.camera,
-        materials,
-        lights,
-        meshes: meshes.meshes,
-        objects,
-        media,
-    };
+    let mut builder = crate::scene::SceneBuilder::new(&doc.root.origin.file);
+    // Materials are made for the shapes that use them (and keyed by them).
+    for material in materials {
+        builder.add_material(material, doc.root.origin.part());
+    }
+    for mesh in meshes.meshes {
+        builder.add_mesh(mesh);
+    }
+    for (object, origin) in objects {
+        builder.add_object(object, origin);
+    }
+    for (light, origin) in lights {
+        builder.add_light(light, origin);
+    }
+    builder.set_media(media);
+    builder.set_camera(sensor.camera);
+    builder.set_settings(settings);
+    let scene = builder.build()?;
     if scene.objects.is_empty() && scene.lights.is_empty() {
         return Err(doc.root.origin.error("the scene has no shape and no emitter"));
     }
@@ -267,7 +268,8 @@ struct Builder<'a> {
     mesh_index: HashMap<(PathBuf, Option<u32>, bool, bool), u32>,
     /// (shape element, flip) → generated mesh (cube, flipped rectangle).
     generated_index: HashMap<(usize, bool), u32>,
-    objects: Vec<Object>,
+    /// The objects, each with the `<shape>` it comes from.
+    objects: Vec<(Object, crate::scene::Origin)>,
     /// Per object, the media on its sides.
     interfaces: Vec<crate::scene::MediumInterface>,
     /// The media the shapes and the sensor name.

@@ -72,7 +72,7 @@ impl Builder<'_> {
             }
             _ => {
                 let (object, interface) = self.object(p, &Mat4::IDENTITY, None)?;
-                self.objects.push(object);
+                self.objects.push((object, p.origin().part()));
                 self.interfaces.push(interface);
                 Ok(())
             }
@@ -131,7 +131,7 @@ impl Builder<'_> {
             // `children_of` marked the emitters read: read the member afresh.
             let member = member.fresh()?;
             let (object, interface) = self.object(&member, to_world, Some(instance))?;
-            self.objects.push(object);
+            self.objects.push((object, member.origin().part()));
             self.interfaces.push(interface);
         }
         Ok(())

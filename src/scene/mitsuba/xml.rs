@@ -55,6 +55,14 @@ impl Origin {
         self.file.parent().unwrap_or(Path::new(""))
     }
 
+    /// This place as the origin of a part of the scene.
+    pub fn part(&self) -> crate::scene::Origin {
+        crate::scene::Origin::Text {
+            path: self.file.to_path_buf(),
+            place: self.place,
+        }
+    }
+
     /// An error at this place.
     pub fn error(&self, message: impl Into<String>) -> SceneError {
         SceneError::Invalid {
