@@ -438,6 +438,9 @@ pub fn render_progressive(
     let mut photon_totals: Option<PhotonStats> = None;
     let mut last_map: Option<Arc<PhotonMap>> = None;
     let states = split_into_tiles(&start);
+    // The tiles hold the state now: one copy of the image's buffers lives
+    // during the passes, not two.
+    drop(start);
     let last_checkpoint = Mutex::new(Instant::now());
     let mut stats = RenderStats::default();
 
@@ -445,15 +448,19 @@ pub fn render_progressive(
         // Between passes every pixel still sampling has the same count: the
         // place of adaptive sampling's decision (also right after a resume
         // from such a state; the decision is idempotent, see `mark_converged`).
-        let mut acc = snapshot(&states, width, height);
-        let mut level = acc.active_level().unwrap_or(limit);
+        let mut level = active_level(&states).unwrap_or(limit);
         if let Some(a) = plan.adaptive {
-            if level >= a.min_spp && level < limit && mark_converged(&mut acc, &a, level) > 0 {
-                for state in &states {
-                    let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
-                    s.acc = acc.region(s.tile.x0, s.tile.y0, s.tile.x1, s.tile.y1);
+            // The decision looks across tiles (a pixel's neighbourhood): on
+            // a whole-image copy, made only when a decision is due.
+            if level >= a.min_spp && level < limit {
+                let mut acc = snapshot(&states, width, height);
+                if mark_converged(&mut acc, &a, level) > 0 {
+                    for state in &states {
+                        let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
+                        s.acc = acc.region(s.tile.x0, s.tile.y0, s.tile.x1, s.tile.y1);
+                    }
+                    level = acc.active_level().unwrap_or(limit);
                 }
-                level = acc.active_level().unwrap_or(limit);
             }
         }
         if level >= limit || stop.is_due() {
@@ -521,7 +528,7 @@ pub fn render_progressive(
         }
     }
 
-    let accumulation = snapshot(&states, width, height);
+    let accumulation = assemble(states, width, height);
     stats.wall_time = begin.elapsed();
     stats.photons = photon_totals;
     RenderOutput {
@@ -635,6 +642,26 @@ fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulatio
         acc.put_region(s.tile.x0, s.tile.y0, &s.acc);
     }
     acc
+}
+
+/// The whole accumulation from the tiles, each freed once copied.
+fn assemble(states: Vec<Mutex<TileState>>, width: u32, height: u32) -> Accumulation {
+    let mut acc = Accumulation::new(width, height);
+    for state in states {
+        let s = state.into_inner().unwrap_or_else(PoisonError::into_inner);
+        acc.put_region(s.tile.x0, s.tile.y0, &s.acc);
+    }
+    acc
+}
+
+/// Fewest samples taken by a pixel still sampling, over every tile (`None`
+/// when every pixel has converged): [`Accumulation::active_level`] without
+/// a whole-image copy.
+fn active_level(states: &[Mutex<TileState>]) -> Option<u32> {
+    states
+        .iter()
+        .filter_map(|state| state.lock().unwrap_or_else(PoisonError::into_inner).acc.active_level())
+        .min()
 }
 
 /// Adaptive sampling's decision between two passes, when every pixel still
