@@ -181,7 +181,9 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
 fn adaptive_renders_are_deterministic_across_threads_and_resume() {
     let scene = adaptive_scene(0.08);
     let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let mut plan = RenderPlan::new(&scene);
+    // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
+    plan.aovs = true;
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
     let a = pool(1).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
     let b = pool(3).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));

@@ -94,7 +94,9 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
 fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
     let scene = caustic_scene(6);
     let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let mut plan = RenderPlan::new(&scene);
+    // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
+    (plan.aovs, plan.noise) = (true, true);
     let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
 
     // A limit off the pass boundaries (passes go to 4, 6): the resume

@@ -28,16 +28,56 @@ pub struct Accumulation {
     /// Sum of the kept samples of odd index (one half of `sum`, the other
     /// half being `sum − odd`): the two half-buffer means estimate each
     /// pixel's noise (Dammertz et al. 2010; Cycles' adaptive sampling).
+    /// Empty when the accumulation keeps no noise estimate ([`Buffers`]).
     pub odd: Vec<Vec3>,
-    /// Kept samples of odd index.
+    /// Kept samples of odd index (empty with `odd`).
     pub odd_kept: Vec<u32>,
     /// Pixels adaptive sampling has stopped: they take no more samples.
     pub converged: Vec<bool>,
     /// Sum of the albedo AOV of the pixel's first [`AOV_SAMPLES`] samples
     /// (every sample taken counts, in increasing sample index, in f32).
+    /// Empty when the accumulation keeps no AOVs ([`Buffers`]).
     pub albedo: Vec<Vec3>,
-    /// Sum of the shading-normal AOV of the same samples.
+    /// Sum of the shading-normal AOV of the same samples (empty with `albedo`).
     pub normal: Vec<Vec3>,
+}
+
+/// The optional per-pixel buffers of an [`Accumulation`]. Every
+/// accumulation keeps the sum and the counts (`sum`, `taken`, `kept`,
+/// `converged`: 21 bytes per pixel); the noise estimate adds 16 bytes and
+/// the AOVs 24, kept only when something reads them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Buffers {
+    /// The odd-sample half sums (`odd`, `odd_kept`): adaptive sampling, the
+    /// EXR's error layer, checkpoints and partials.
+    pub noise: bool,
+    /// The albedo and normal sums: denoising, the EXR's AOV layers,
+    /// checkpoints and partials, the viewer.
+    pub aovs: bool,
+}
+
+impl Buffers {
+    /// Every buffer.
+    pub const ALL: Buffers = Buffers {
+        noise: true,
+        aovs: true,
+    };
+
+    /// Bytes per pixel of an accumulation with these buffers.
+    pub fn bytes_per_pixel(self) -> usize {
+        let base = std::mem::size_of::<Vec3>() + 2 * std::mem::size_of::<u32>() + std::mem::size_of::<bool>();
+        let noise = std::mem::size_of::<Vec3>() + std::mem::size_of::<u32>();
+        let aovs = 2 * std::mem::size_of::<Vec3>();
+        base + if self.noise { noise } else { 0 } + if self.aovs { aovs } else { 0 }
+    }
+
+    /// The buffers either keeps.
+    pub fn union(self, other: Buffers) -> Buffers {
+        Buffers {
+            noise: self.noise || other.noise,
+            aovs: self.aovs || other.aovs,
+        }
+    }
 }
 
 /// Samples per pixel that trace the auxiliary images (albedo, normal): the
@@ -50,27 +90,55 @@ pub const AOV_SAMPLES: u32 = 64;
 pub const RELATIVE_ERROR_FLOOR: f32 = 1.0e-2;
 
 impl Accumulation {
-    /// An empty accumulation: no sample taken anywhere.
+    /// An empty accumulation with every buffer: no sample taken anywhere.
     pub fn new(width: u32, height: u32) -> Self {
+        Self::with_buffers(width, height, Buffers::ALL)
+    }
+
+    /// An empty accumulation keeping `buffers`.
+    pub fn with_buffers(width: u32, height: u32, buffers: Buffers) -> Self {
         let n = width as usize * height as usize;
+        let (noise, aovs) = (if buffers.noise { n } else { 0 }, if buffers.aovs { n } else { 0 });
         Self {
             width,
             height,
             sum: vec![Vec3::ZERO; n],
             taken: vec![0; n],
             kept: vec![0; n],
-            odd: vec![Vec3::ZERO; n],
-            odd_kept: vec![0; n],
+            odd: vec![Vec3::ZERO; noise],
+            odd_kept: vec![0; noise],
             converged: vec![false; n],
-            albedo: vec![Vec3::ZERO; n],
-            normal: vec![Vec3::ZERO; n],
+            albedo: vec![Vec3::ZERO; aovs],
+            normal: vec![Vec3::ZERO; aovs],
+        }
+    }
+
+    /// The optional buffers this accumulation keeps.
+    pub fn buffers(&self) -> Buffers {
+        let n = self.len();
+        Buffers {
+            noise: self.odd.len() == n && self.odd_kept.len() == n,
+            aovs: self.albedo.len() == n && self.normal.len() == n,
         }
     }
 
     /// The pixels of the rectangle `x0..x1 × y0..y1` as an accumulation of
-    /// their own (a tile's state during a render).
+    /// their own (a tile's state during a render), keeping `buffers`.
+    pub fn region_with(&self, x0: u32, y0: u32, x1: u32, y1: u32, buffers: Buffers) -> Accumulation {
+        let mut part = Accumulation::with_buffers(x1 - x0, y1 - y0, buffers);
+        let (w, pw) = (self.width as usize, part.width as usize);
+        for (r, y) in (y0..y1).enumerate() {
+            let src = y as usize * w + x0 as usize..y as usize * w + x1 as usize;
+            let dst = r * pw..(r + 1) * pw;
+            part.copy_span(dst, self, src);
+        }
+        part
+    }
+
+    /// The pixels of the rectangle `x0..x1 × y0..y1` as an accumulation of
+    /// their own, with this one's buffers.
     pub fn region(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> Accumulation {
-        let mut part = Accumulation::new(x1 - x0, y1 - y0);
+        let mut part = Accumulation::with_buffers(x1 - x0, y1 - y0, self.buffers());
         let (w, pw) = (self.width as usize, part.width as usize);
         for (r, y) in (y0..y1).enumerate() {
             let src = y as usize * w + x0 as usize..y as usize * w + x1 as usize;
@@ -90,15 +158,22 @@ impl Accumulation {
         }
     }
 
+    /// Copies pixels `from` of `src` to `dst`: the buffers both keep (one
+    /// that `src` lacks stays zero here).
     fn copy_span(&mut self, dst: std::ops::Range<usize>, src: &Accumulation, from: std::ops::Range<usize>) {
         self.sum[dst.clone()].copy_from_slice(&src.sum[from.clone()]);
         self.taken[dst.clone()].copy_from_slice(&src.taken[from.clone()]);
         self.kept[dst.clone()].copy_from_slice(&src.kept[from.clone()]);
-        self.odd[dst.clone()].copy_from_slice(&src.odd[from.clone()]);
-        self.odd_kept[dst.clone()].copy_from_slice(&src.odd_kept[from.clone()]);
         self.converged[dst.clone()].copy_from_slice(&src.converged[from.clone()]);
-        self.albedo[dst.clone()].copy_from_slice(&src.albedo[from.clone()]);
-        self.normal[dst].copy_from_slice(&src.normal[from]);
+        let (mine, theirs) = (self.buffers(), src.buffers());
+        if mine.noise && theirs.noise {
+            self.odd[dst.clone()].copy_from_slice(&src.odd[from.clone()]);
+            self.odd_kept[dst.clone()].copy_from_slice(&src.odd_kept[from.clone()]);
+        }
+        if mine.aovs && theirs.aovs {
+            self.albedo[dst.clone()].copy_from_slice(&src.albedo[from.clone()]);
+            self.normal[dst].copy_from_slice(&src.normal[from]);
+        }
     }
 
     /// Estimated relative standard error of pixel `i`'s mean: from the two
@@ -107,8 +182,12 @@ impl Accumulation {
     /// taken relative to the mean as relMSE does,
     /// `sqrt(mean_c(σ_c² / (Ī_c² + ε)))` with ε = [`RELATIVE_ERROR_FLOOR`],
     /// so that dark pixels are judged by an absolute floor and bright ones
-    /// relatively. Infinite while either half is empty.
+    /// relatively. Infinite while either half is empty, and without the
+    /// noise buffers.
     pub fn relative_error(&self, i: usize) -> f32 {
+        if !self.buffers().noise {
+            return f32::INFINITY;
+        }
         let (kept, odd_kept) = (self.kept[i], self.odd_kept[i]);
         let even_kept = kept - odd_kept;
         if odd_kept == 0 || even_kept == 0 {
@@ -273,7 +352,15 @@ impl Accumulation {
         self.aov_film(&self.normal, true)
     }
 
+    /// Black without the AOV buffers.
     fn aov_film(&self, sums: &[Vec3], unit: bool) -> Film {
+        if sums.len() != self.len() {
+            return Film {
+                width: self.width,
+                height: self.height,
+                pixels: vec![Vec3::ZERO; self.len()],
+            };
+        }
         let pixels = sums
             .iter()
             .enumerate()
@@ -335,6 +422,35 @@ mod tests {
         assert!(a.validate(8).unwrap_err().contains("pixel (2, 1)"));
         a.sum.pop();
         assert!(a.validate(8).unwrap_err().contains("5 sums"));
+    }
+
+    #[test]
+    fn optional_buffers_are_kept_only_when_asked_for() {
+        let lean = Buffers {
+            noise: false,
+            aovs: false,
+        };
+        let mut a = Accumulation::with_buffers(4, 2, lean);
+        assert_eq!(a.buffers(), lean);
+        assert!(a.odd.is_empty() && a.albedo.is_empty());
+        assert_eq!(lean.bytes_per_pixel(), 21);
+        assert_eq!(Buffers::ALL.bytes_per_pixel(), 61);
+        a.sum[5] = Vec3::ONE;
+        a.taken[5] = 2;
+        a.kept[5] = 2;
+        // Without the noise buffers the error is unknown, and the AOVs black.
+        assert_eq!(a.relative_error(5), f32::INFINITY);
+        assert_eq!(a.albedo_film().pixels, vec![Vec3::ZERO; 8]);
+        // A region keeps its source's buffers, or the ones asked for.
+        let r = a.region(1, 1, 3, 2);
+        assert_eq!((r.buffers(), r.sum[0]), (lean, Vec3::ONE));
+        let full = a.region_with(0, 0, 4, 2, Buffers::ALL);
+        assert_eq!(full.buffers(), Buffers::ALL);
+        assert_eq!((full.sum[5], full.odd[5]), (Vec3::ONE, Vec3::ZERO));
+        let mut back = Accumulation::new(4, 2);
+        back.put_region(1, 1, &r);
+        assert_eq!(back.sum[5], Vec3::ONE);
+        assert_eq!(back.to_film().pixels, a.to_film().pixels);
     }
 
     #[test]

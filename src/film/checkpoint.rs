@@ -123,9 +123,18 @@ const CONVERGED: &str = "converged";
 const ALBEDO: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
 const NORMAL: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
 
-/// Writes `accumulation` and `meta` to `path` atomically.
+/// Writes `accumulation` and `meta` to `path` atomically. A checkpoint
+/// holds every buffer: those `accumulation` does not keep are written as
+/// zeros (a render that checkpoints keeps them all, see `job`).
 pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &CheckpointMeta) -> Result<(), OutputError> {
     use exr::prelude::*;
+    let full;
+    let accumulation = if accumulation.buffers() == super::Buffers::ALL {
+        accumulation
+    } else {
+        full = accumulation.region_with(0, 0, accumulation.width, accumulation.height, super::Buffers::ALL);
+        &full
+    };
     let size = (accumulation.width as usize, accumulation.height as usize);
     let film = accumulation.to_film();
     let component =

@@ -13,7 +13,7 @@ pub mod tonemap;
 
 use crate::math::Vec3;
 
-pub use accum::Accumulation;
+pub use accum::{Accumulation, Buffers};
 pub use checkpoint::{
     read_checkpoint, read_checkpoint_meta, write_checkpoint, Checkpoint, CheckpointError, CheckpointMeta,
 };

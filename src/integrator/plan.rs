@@ -249,6 +249,11 @@ pub struct RenderPlan {
     /// reads them (denoising, an EXR, a checkpoint or a shard's partial,
     /// the viewer). `RenderPlan::new` sets it for a scene that denoises.
     pub aovs: bool,
+    /// Keep the odd-sample half sums that estimate each pixel's noise:
+    /// adaptive sampling reads them, and so do an EXR's error layer,
+    /// checkpoints and partials. `RenderPlan::new` sets it for adaptive
+    /// sampling.
+    pub noise: bool,
 }
 
 impl RenderPlan {
@@ -432,6 +437,15 @@ impl RenderPlan {
             fog,
             keep_photon_positions: false,
             aovs: s.denoise,
+            noise: s.noise_threshold.is_some(),
+        }
+    }
+
+    /// The optional buffers a render with this plan keeps per pixel.
+    pub fn buffers(&self) -> crate::film::Buffers {
+        crate::film::Buffers {
+            noise: self.noise || self.adaptive.is_some(),
+            aovs: self.aovs,
         }
     }
 

@@ -23,7 +23,7 @@ use super::photon::{
 use super::plan::{Adaptive, PhotonPlan, RenderPlan};
 use super::whitted::{RayCounts, SampleContext, Whitted};
 use crate::accel::Accel;
-use crate::film::{Accumulation, Film};
+use crate::film::{Accumulation, Buffers, Film};
 use crate::math::rng::Domain;
 use crate::math::sampling::{grid_for, permute, stratified};
 use crate::math::{Rng, Sampler, SamplerKind, Vec3, Vec3A};
@@ -437,7 +437,14 @@ pub fn render_progressive(
     // Progressive photon mapping: the maps' totals and the latest map.
     let mut photon_totals: Option<PhotonStats> = None;
     let mut last_map: Option<Arc<PhotonMap>> = None;
-    let states = split_into_tiles(&start);
+    // A fresh render keeps the buffers the plan reads; a continued one
+    // also keeps those its state has (a checkpoint goes on holding them).
+    let buffers = if start.samples_taken() == 0 {
+        plan.buffers()
+    } else {
+        plan.buffers().union(start.buffers())
+    };
+    let states = split_into_tiles(&start, buffers);
     // The tiles hold the state now: one copy of the image's buffers lives
     // during the passes, not two.
     drop(start);
@@ -621,13 +628,13 @@ fn tiles_of(width: u32, height: u32) -> Vec<Tile> {
     tiles
 }
 
-fn split_into_tiles(acc: &Accumulation) -> Vec<Mutex<TileState>> {
+fn split_into_tiles(acc: &Accumulation, buffers: Buffers) -> Vec<Mutex<TileState>> {
     tiles_of(acc.width, acc.height)
         .into_iter()
         .map(|tile| {
             Mutex::new(TileState {
                 tile,
-                acc: acc.region(tile.x0, tile.y0, tile.x1, tile.y1),
+                acc: acc.region_with(tile.x0, tile.y0, tile.x1, tile.y1, buffers),
             })
         })
         .collect()
@@ -636,7 +643,7 @@ fn split_into_tiles(acc: &Accumulation) -> Vec<Mutex<TileState>> {
 /// The whole accumulation, tile by tile (each tile locked while copied, so
 /// every pixel holds whole samples).
 fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulation {
-    let mut acc = Accumulation::new(width, height);
+    let mut acc = Accumulation::with_buffers(width, height, tile_buffers(states));
     for state in states {
         let s = state.lock().unwrap_or_else(PoisonError::into_inner);
         acc.put_region(s.tile.x0, s.tile.y0, &s.acc);
@@ -644,9 +651,16 @@ fn snapshot(states: &[Mutex<TileState>], width: u32, height: u32) -> Accumulatio
     acc
 }
 
+/// The buffers the tiles keep (all alike).
+fn tile_buffers(states: &[Mutex<TileState>]) -> Buffers {
+    states.first().map_or(Buffers::ALL, |s| {
+        s.lock().unwrap_or_else(PoisonError::into_inner).acc.buffers()
+    })
+}
+
 /// The whole accumulation from the tiles, each freed once copied.
 fn assemble(states: Vec<Mutex<TileState>>, width: u32, height: u32) -> Accumulation {
-    let mut acc = Accumulation::new(width, height);
+    let mut acc = Accumulation::with_buffers(width, height, tile_buffers(&states));
     for state in states {
         let s = state.into_inner().unwrap_or_else(PoisonError::into_inner);
         acc.put_region(s.tile.x0, s.tile.y0, &s.acc);
@@ -842,10 +856,7 @@ pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &m
             (Vec3::from(albedo), Vec3::from(normal))
         })
         .collect();
-    for (i, (albedo, normal)) in sums.into_iter().enumerate() {
-        acc.albedo[i] = albedo;
-        acc.normal[i] = normal;
-    }
+    (acc.albedo, acc.normal) = sums.into_iter().unzip();
 }
 
 /// Brings every pixel of the tile to `target` samples (pixels already there
@@ -866,6 +877,7 @@ fn render_tile_pass(
     let tile = state.tile;
     let tw = (tile.x1 - tile.x0) as usize;
     let acc = &mut state.acc;
+    let buffers = acc.buffers();
     let mut out = PassWork::default();
     let mut sites = SiteCache::default();
     for y in tile.y0..tile.y1 {
@@ -882,13 +894,19 @@ fn render_tile_pass(
             let strata = PixelStrata::new(plan, seed, samples.pixel);
             // Continue the f32 running sums exactly where they stopped.
             let mut sum = Vec3A::from(acc.sum[i]);
-            let mut odd = Vec3A::from(acc.odd[i]);
-            let (mut kept, mut odd_kept) = (acc.kept[i], acc.odd_kept[i]);
-            let (mut albedo, mut normal) = (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i]));
+            let mut kept = acc.kept[i];
+            let (mut odd, mut odd_kept) = match buffers.noise {
+                true => (Vec3A::from(acc.odd[i]), acc.odd_kept[i]),
+                false => (Vec3A::ZERO, 0),
+            };
+            let (mut albedo, mut normal) = match buffers.aovs {
+                true => (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i])),
+                false => (Vec3A::ZERO, Vec3A::ZERO),
+            };
             for k in first..target {
                 let (ray, mut rng) = samples.ray(k);
                 out.rays.camera += 1;
-                if plan.aovs && k < AOV_SAMPLES {
+                if plan.aovs && buffers.aovs && k < AOV_SAMPLES {
                     // No random numbers: the sample below is unchanged.
                     let (a, n) = aovs.trace(&ray);
                     albedo += a;
@@ -923,11 +941,15 @@ fn render_tile_pass(
                 }
             }
             acc.sum[i] = Vec3::from(sum);
-            acc.odd[i] = Vec3::from(odd);
             acc.kept[i] = kept;
-            acc.odd_kept[i] = odd_kept;
-            acc.albedo[i] = Vec3::from(albedo);
-            acc.normal[i] = Vec3::from(normal);
+            if buffers.noise {
+                acc.odd[i] = Vec3::from(odd);
+                acc.odd_kept[i] = odd_kept;
+            }
+            if buffers.aovs {
+                acc.albedo[i] = Vec3::from(albedo);
+                acc.normal[i] = Vec3::from(normal);
+            }
             acc.taken[i] = target;
         }
     }
@@ -1110,7 +1132,7 @@ mod tests {
             acc.taken[i] = i as u32 % 7;
             acc.kept[i] = i as u32 % 5;
         }
-        let states = split_into_tiles(&acc);
+        let states = split_into_tiles(&acc, acc.buffers());
         assert_eq!(states.len(), 3 * 2);
         assert_eq!(snapshot(&states, 70, 33), acc);
     }

@@ -623,7 +623,10 @@ impl RenderJob {
         let mut plan = RenderPlan::new(&self.scene);
         plan.keep_photon_positions = matches!(self.debug, Some(DebugView::Photons));
         // Every EXR this job writes (output, checkpoint, partial) holds them.
-        plan.aovs |= self.exr.is_some() || self.checkpoint.is_some() || self.shard.is_some();
+        let every_buffer = self.exr.is_some() || self.checkpoint.is_some() || self.shard.is_some();
+        plan.aovs |= every_buffer;
+        // So do the noise estimate's half sums (the EXR's error layer).
+        plan.noise |= every_buffer;
         plan
     }
 
