@@ -387,6 +387,74 @@ fn invalid_materials() {
     );
 }
 
+/// `[materials.NAME.disney]`: each bad value at its place, the keys of the
+/// other variant at the table.
+#[test]
+fn invalid_disney_parameters() {
+    let mat = |body: &str| format!("{CAMERA}[materials.m]\n{body}");
+    expect_error(
+        &mat("disney = { roughness = 1.5 }\n"),
+        5,
+        24,
+        "`roughness` = 1.5 must be in [0, 1]",
+    );
+    expect_error(
+        &mat("disney = { thin = true, diff_trans = 2.5 }\n"),
+        5,
+        38,
+        "`diff_trans` = 2.5 must be in [0, 2]",
+    );
+    expect_error(
+        &mat("disney = { thin = true, metallic = 0.5 }\n"),
+        5,
+        10,
+        "`metallic` is not a parameter of a thin Disney BSDF",
+    );
+    expect_error(
+        &mat("disney = { diff_trans = 0.5 }\n"),
+        5,
+        10,
+        "`diff_trans` is not a parameter of a (not thin) Disney BSDF",
+    );
+    expect_error(
+        &mat("disney = { eta = 1.4, specular = 0.5 }\n"),
+        5,
+        18,
+        "give `eta` or `specular`, not both",
+    );
+    expect_error(
+        &mat("disney = { specular = 12.5 }\n"),
+        5,
+        23,
+        "`specular` = 12.5 must be in [0, 12.5)",
+    );
+    expect_error(&mat("disney = { eta = 0 }\n"), 5, 18, "`eta` = 0 must be > 0");
+    expect_error(
+        &mat("disney = { eta = { type = \"checkerboard\" } }\n"),
+        5,
+        18,
+        "only a thin Disney BSDF takes a texture",
+    );
+    expect_error(
+        &mat("disney = { sheen = [0.5, 0.5, 0.5] }\n"),
+        5,
+        20,
+        "`sheen` is a number or a texture, not a colour",
+    );
+    expect_error(
+        &mat("disney = { specular_sampling_rate = -1 }\n"),
+        5,
+        37,
+        "`specular_sampling_rate` = -1 must be ≥ 0",
+    );
+    expect_error(
+        &mat("principled = { metallic = 1 }\ndisney = { sheen = 1 }\n"),
+        6,
+        10,
+        "both `principled` and `disney`",
+    );
+}
+
 #[test]
 fn degenerate_camera() {
     expect_error(

@@ -284,6 +284,45 @@ material = "m"
     assert_eq!(s.objects[0].material, 1);
 }
 
+/// `[materials.NAME.disney]` alone is Mitsuba's `principled` with its
+/// defaults (base colour 0.5, `specular` 0.5), with `thin = true` its
+/// `principledthin` (index 1.5); `specular` sets the index as Mitsuba does,
+/// and a refracting index of 1 becomes 1.001.
+#[test]
+fn disney_tables_take_mitsuba_defaults() {
+    let s = parse(
+        r#"
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.a.disney]
+[materials.b.disney]
+thin = true
+[materials.c.disney]
+specular = 0.3
+[materials.d.disney]
+eta = 1
+spec_trans = 0.5
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+material = "a"
+"#,
+    );
+    let [a, b, c, d] = [0, 1, 2, 3].map(|i| (s.materials[i].diffuse, s.materials[i].disney.unwrap()));
+    assert_eq!(a.0, Vec3A::splat(0.5));
+    assert_eq!(a.1, caustic::scene::Disney::default());
+    assert_eq!(b.1, caustic::scene::Disney::thin_default());
+    assert_eq!(b.1.eta, 1.5);
+    assert!(
+        (c.1.eta - (2.0 / (1.0 - (0.08f32 * 0.3).sqrt()) - 1.0)).abs() < 1e-6,
+        "{:?}",
+        c.1
+    );
+    assert_eq!((d.1.eta, d.1.spec_trans), (1.001, 0.5));
+}
+
 #[test]
 fn shipped_test_scenes_load() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test");

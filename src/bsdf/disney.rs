@@ -273,7 +273,7 @@ impl Disney {
 }
 
 /// Mitsuba's `luminance` of linear sRGB (Rec. 709 weights).
-fn luminance(c: Vec3A) -> f32 {
+pub(super) fn luminance(c: Vec3A) -> f32 {
     0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
 }
 
@@ -282,12 +282,12 @@ fn sqrt3(c: Vec3A) -> Vec3A {
 }
 
 /// Dr.Jit's `lerp(a, b, t)`.
-fn lerp(a: f32, b: f32, t: f32) -> f32 {
+pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
 }
 
 /// `(1 − cos)^5`, clamped (`schlick_weight`).
-fn schlick_weight(cos: f32) -> f32 {
+pub(super) fn schlick_weight(cos: f32) -> f32 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     m * m * m * m * m
 }
@@ -295,7 +295,7 @@ fn schlick_weight(cos: f32) -> f32 {
 /// `calc_schlick`: `R0 + (1 − R0)(1 − c)^5` with `c` the cosine on the
 /// less dense side of an interface of index `eta` (the transmitted one from
 /// the denser side).
-fn schlick(r0: Vec3A, cos: f32, eta: f32) -> Vec3A {
+pub(super) fn schlick(r0: Vec3A, cos: f32, eta: f32) -> Vec3A {
     let eta_it = if cos >= 0.0 { eta } else { 1.0 / eta };
     let eta_ti = 1.0 / eta_it;
     let cos_t = (1.0 - (1.0 - cos * cos) * eta_ti * eta_ti).max(0.0).sqrt();
@@ -310,7 +310,7 @@ fn schlick(r0: Vec3A, cos: f32, eta: f32) -> Vec3A {
 /// `mac_mic_compatibility`: `wo` and `wi` on the sides of the microfacet `m`
 /// (turned toward `wo`'s side of the surface) that reflection or
 /// refraction requires.
-fn compatible(m: Vec3A, wo: Vec3A, wi: Vec3A, cos_i: f32, reflection: bool) -> bool {
+pub(super) fn compatible(m: Vec3A, wo: Vec3A, wi: Vec3A, cos_i: f32, reflection: bool) -> bool {
     let m = if cos_i < 0.0 { -m } else { m };
     let wi_side = if reflection { wi.dot(m) } else { -wi.dot(m) };
     wo.dot(m) > 0.0 && wi_side > 0.0

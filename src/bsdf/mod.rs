@@ -12,7 +12,8 @@
 //! Lobes: [`phong`] (the original report's Lambert, Phong / Blinn-Phong and
 //! mirror), [`dielectric`] (smooth and rough glass), [`conductor`] (smooth
 //! and rough metals; named presets in `scene::metals`), [`plastic`] (coated diffuse),
-//! [`principled`] (glTF's metallic-roughness), [`disney`] (Mitsuba's `principled`);
+//! [`principled`] (glTF's metallic-roughness), [`disney`] (Mitsuba's `principled`),
+//! [`disney_thin`] (Mitsuba's `principledthin`);
 //! [`fresnel`] and [`microfacet`] are their building blocks; [`specular`]
 //! holds the world-space reflection and refraction shared with the Whitted
 //! integrator and the photon tracer.
@@ -20,6 +21,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod disney;
+pub mod disney_thin;
 pub mod fresnel;
 pub mod microfacet;
 pub mod null;
@@ -37,6 +39,7 @@ use crate::scene::Material;
 use conductor::{RoughConductor, SmoothConductor};
 use dielectric::{RoughDielectric, SmoothDielectric, ThinDielectric};
 use disney::Disney;
+use disney_thin::DisneyThin;
 use microfacet::{Microfacet, SMOOTH_ALPHA};
 use null::Null;
 use phong::{Highlight, Lambert, Mirror};
@@ -132,6 +135,8 @@ enum Lobe<'a> {
     Principled(Principled),
     /// Mitsuba's `principled` (Burley's Disney BSDF).
     Disney(Disney),
+    /// Mitsuba's `principledthin` (the thin Disney BSDF).
+    DisneyThin(DisneyThin),
     /// Mitsuba's `null`, or a blend's hole: light continues straight through, unchanged.
     Null(Null),
 }
@@ -147,6 +152,7 @@ impl Lobe<'_> {
             Lobe::RoughPlastic(p) => p.eval(wo, wi),
             Lobe::Principled(p) => p.eval(wo, wi, transport),
             Lobe::Disney(d) => d.eval(wo, wi, transport),
+            Lobe::DisneyThin(d) => d.eval(wo, wi),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -165,6 +171,7 @@ impl Lobe<'_> {
             Lobe::RoughPlastic(p) => p.pdf(wo, wi),
             Lobe::Principled(p) => p.pdf(wo, wi),
             Lobe::Disney(d) => d.pdf(wo, wi),
+            Lobe::DisneyThin(d) => d.pdf(wo, wi),
             Lobe::Mirror(_)
             | Lobe::SmoothDielectric(_)
             | Lobe::ThinDielectric(_)
@@ -187,6 +194,7 @@ impl Lobe<'_> {
             Lobe::RoughPlastic(p) => p.sample(wo, uc, u),
             Lobe::Principled(p) => p.sample(wo, uc, u, transport),
             Lobe::Disney(d) => d.sample(wo, uc, u, transport),
+            Lobe::DisneyThin(d) => d.sample(wo, uc, u),
             Lobe::Null(n) => n.sample(wo),
         }
     }
@@ -298,6 +306,11 @@ impl<'a> Bsdf<'a> {
                 }),
             };
             b.push(lobe, 1.0);
+        } else if let Some(d) = m.disney.filter(|d| d.thin) {
+            // Both sides alike, with or without `twosided` (Mitsuba's
+            // `principledthin` turns the directions itself).
+            b.two_sided = true;
+            b.push(Lobe::DisneyThin(DisneyThin::new(m.diffuse, d)), 1.0);
         } else if let Some(d) = m.disney {
             // One-sided like Mitsuba's `principled` unless wrapped in `twosided`.
             b.push(Lobe::Disney(Disney::new(m.diffuse, d)), 1.0);
@@ -399,6 +412,7 @@ impl<'a> Bsdf<'a> {
             Lobe::RoughConductor(c) => c.microfacet.is_anisotropic(),
             Lobe::RoughDielectric(d) => d.microfacet.is_anisotropic(),
             Lobe::Disney(d) => d.microfacet.is_anisotropic(),
+            Lobe::DisneyThin(d) => d.is_anisotropic(),
             _ => false,
         })
     }

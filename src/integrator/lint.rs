@@ -121,7 +121,8 @@ fn warnings_of(m: &Material, integrator: IntegratorKind, has_delta_light: bool) 
     }
     if m.disney.is_some() && whitted {
         out.push(
-            "the Whitted integrator lights Mitsuba's `principled` directly and shows no reflection or refraction in it"
+            "the Whitted integrator lights a Disney material (Mitsuba's `principled` or `principledthin`) directly \
+             and shows no reflection or transmission in it"
                 .into(),
         );
     }

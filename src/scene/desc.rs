@@ -413,6 +413,8 @@ pub struct MaterialDesc {
     pub coating: Option<Spanned<CoatingDesc>>,
     /// `[materials.NAME.principled]`.
     pub principled: Option<Spanned<PrincipledDesc>>,
+    /// `[materials.NAME.disney]`.
+    pub disney: Option<Spanned<DisneyDesc>>,
     /// `[materials.NAME.blend]`.
     pub blend: Option<Spanned<BlendDesc>>,
     /// Emitted radiance: a colour, a number or a texture.
@@ -527,6 +529,53 @@ pub struct PrincipledDesc {
     pub clearcoat: Option<Spanned<ParamDesc>>,
     /// Perceptual roughness of the clear coat, in [0, 1].
     pub clearcoat_roughness: Option<Spanned<ParamDesc>>,
+}
+
+/// `[materials.NAME.disney]`: Burley's Disney BSDF as Mitsuba 3 writes
+/// it (its `principled`, or with `thin` its `principledthin`), with the
+/// material's `diffuse` as its base colour. Weights are numbers in [0, 1]
+/// or scalar textures.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisneyDesc {
+    /// Mitsuba's `principledthin`: a two-sided sheet with no interior.
+    pub thin: Option<Spanned<bool>>,
+    /// Burley's roughness (GGX `alpha` is its square).
+    pub roughness: Option<Spanned<ParamDesc>>,
+    /// Stretches the roughness along `∂p/∂u`.
+    pub anisotropic: Option<Spanned<ParamDesc>>,
+    /// Metalness (not thin).
+    pub metallic: Option<Spanned<ParamDesc>>,
+    /// Fraction of the dielectric that refracts (thin: that is specular).
+    pub spec_trans: Option<Spanned<ParamDesc>>,
+    /// Tints the dielectric reflection toward the base colour.
+    pub spec_tint: Option<Spanned<ParamDesc>>,
+    /// Strength of the sheen.
+    pub sheen: Option<Spanned<ParamDesc>>,
+    /// Tints the sheen toward the base colour.
+    pub sheen_tint: Option<Spanned<ParamDesc>>,
+    /// Blends the diffuse toward a fake subsurface.
+    pub flatness: Option<Spanned<ParamDesc>>,
+    /// Strength of the clear coat (not thin).
+    pub clearcoat: Option<Spanned<ParamDesc>>,
+    /// Glossiness of the clear coat (not thin).
+    pub clearcoat_gloss: Option<Spanned<ParamDesc>>,
+    /// Thin only: the share of the diffuse base transmitted, in [0, 2].
+    pub diff_trans: Option<Spanned<ParamDesc>>,
+    /// Index of the inside over the outside (thin: also a scalar texture).
+    pub eta: Option<Spanned<ParamDesc>>,
+    /// Instead of `eta` (not thin): `eta = 2 / (1 − sqrt(0.08 specular)) − 1`.
+    pub specular: Option<Spanned<f64>>,
+    /// Relative rate of sampling the diffuse reflection.
+    pub diffuse_sampling_rate: Option<Spanned<f64>>,
+    /// Relative rate of sampling the specular reflection.
+    pub specular_sampling_rate: Option<Spanned<f64>>,
+    /// Relative rate of sampling the clear coat (not thin).
+    pub clearcoat_sampling_rate: Option<Spanned<f64>>,
+    /// Thin only: relative rate of sampling the specular transmission.
+    pub specular_transmission_sampling_rate: Option<Spanned<f64>>,
+    /// Thin only: relative rate of sampling the diffuse transmission.
+    pub diffuse_transmission_sampling_rate: Option<Spanned<f64>>,
 }
 
 /// `[[lights]]`: the keys of every light type (the loader checks which

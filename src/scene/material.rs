@@ -224,6 +224,14 @@ impl Default for Principled {
 /// (index [`eta`](Self::eta)), a tinted Schlick term and a metal, a rough
 /// refraction, and a GTR1 clear coat. The base colour is the material's
 /// [`Material::diffuse`] (and its texture). A weight of 0 turns its lobe off.
+///
+/// With [`thin`](Self::thin) it is Mitsuba's `principledthin` instead
+/// (`src/bsdfs/principledthin.cpp`): a two-sided sheet with no interior,
+/// whose specular part (`spec_trans`) reflects and passes straight
+/// through (reflected, then mirrored to the other side), the rest a
+/// diffuse base with sheen split between reflection and Lambertian
+/// transmission by [`diff_trans`](Self::diff_trans); `metallic`,
+/// `clearcoat` and `clearcoat_gloss` are then unused (0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disney {
     /// Burley's roughness: the GGX `alpha` is its square (at least 0.001).
@@ -255,6 +263,17 @@ pub struct Disney {
     pub specular_sampling_rate: f32,
     /// Relative rate of sampling the clear coat.
     pub clearcoat_sampling_rate: f32,
+    /// Mitsuba's `principledthin`: a thin two-sided sheet.
+    pub thin: bool,
+    /// Thin only: the share of the diffuse base transmitted, in [0, 2]
+    /// (2: all of it; Mitsuba halves it).
+    pub diff_trans: f32,
+    /// Thin only: relative rate of sampling the specular transmission
+    /// ([`specular_sampling_rate`](Self::specular_sampling_rate) is then
+    /// that of the specular reflection).
+    pub specular_transmission_sampling_rate: f32,
+    /// Thin only: relative rate of sampling the diffuse transmission.
+    pub diffuse_transmission_sampling_rate: f32,
 }
 
 impl Default for Disney {
@@ -275,6 +294,22 @@ impl Default for Disney {
             diffuse_sampling_rate: 1.0,
             specular_sampling_rate: 1.0,
             clearcoat_sampling_rate: 1.0,
+            thin: false,
+            diff_trans: 0.0,
+            specular_transmission_sampling_rate: 1.0,
+            diffuse_transmission_sampling_rate: 1.0,
+        }
+    }
+}
+
+impl Disney {
+    /// Mitsuba's `principledthin` defaults: roughness 0.5, `eta` 1.5,
+    /// everything else off.
+    pub fn thin_default() -> Self {
+        Self {
+            eta: 1.5,
+            thin: true,
+            ..Self::default()
         }
     }
 }
@@ -462,6 +497,10 @@ pub struct MaterialTextures {
     pub disney_clearcoat: Option<Texture>,
     /// Replaces [`Disney::clearcoat_gloss`] (scalar).
     pub disney_clearcoat_gloss: Option<Texture>,
+    /// Replaces [`Disney::diff_trans`] (scalar).
+    pub disney_diff_trans: Option<Texture>,
+    /// Replaces [`Disney::eta`] (scalar; thin only, as in Mitsuba).
+    pub disney_eta: Option<Texture>,
     /// Multiplies [`Material::emission`] (which then holds the strength).
     pub emission: Option<Texture>,
     /// Perturbs the shading normal.
@@ -502,6 +541,8 @@ macro_rules! value_slots {
             ("disney.flatness", $($r)+ $t.disney_flatness),
             ("disney.clearcoat", $($r)+ $t.disney_clearcoat),
             ("disney.clearcoat_gloss", $($r)+ $t.disney_clearcoat_gloss),
+            ("disney.diff_trans", $($r)+ $t.disney_diff_trans),
+            ("disney.eta", $($r)+ $t.disney_eta),
             ("emission", $($r)+ $t.emission),
         ]
     };
@@ -748,6 +789,8 @@ impl Material {
                 flatness: scalar(&t.disney_flatness, d.flatness),
                 clearcoat: scalar(&t.disney_clearcoat, d.clearcoat),
                 clearcoat_gloss: scalar(&t.disney_clearcoat_gloss, d.clearcoat_gloss),
+                diff_trans: scalar(&t.disney_diff_trans, d.diff_trans),
+                eta: scalar(&t.disney_eta, d.eta),
                 ..d
             }),
             emission: self.emission_at(uv),

@@ -114,6 +114,9 @@ impl Ctx<'_> {
         // Glass and metals have no diffuse term: absent, it is black.
         let default_diffuse = if m.dielectric.is_some() || m.conductor.is_some() {
             Vec3A::ZERO
+        } else if m.disney.is_some() {
+            // Mitsuba's default base colour.
+            Vec3A::splat(0.5)
         } else {
             Vec3A::splat(DEFAULT_DIFFUSE)
         };
@@ -345,6 +348,24 @@ impl Ctx<'_> {
                 })
             }
         };
+        let disney = match &m.disney {
+            None => None,
+            Some(s) => {
+                self.exclusive(
+                    name,
+                    "disney",
+                    s.span(),
+                    &[
+                        ("mirror", m.mirror.is_some()),
+                        ("dielectric", m.dielectric.is_some()),
+                        ("conductor", m.conductor.is_some()),
+                        ("coating", m.coating.is_some()),
+                        ("principled", m.principled.is_some()),
+                    ],
+                )?;
+                Some(self.disney(s, &mut textures)?)
+            }
+        };
         if let Some(n) = m.null.as_ref().filter(|n| *n.get_ref()) {
             self.exclusive(
                 name,
@@ -356,6 +377,7 @@ impl Ctx<'_> {
                     ("conductor", m.conductor.is_some()),
                     ("coating", m.coating.is_some()),
                     ("principled", m.principled.is_some()),
+                    ("disney", m.disney.is_some()),
                     ("blend", m.blend.is_some()),
                 ],
             )?;
@@ -470,7 +492,7 @@ impl Ctx<'_> {
             roughness_v,
             null: m.null.as_ref().is_some_and(|n| *n.get_ref()),
             principled,
-            disney: None,
+            disney,
             blend: None,
         })
     }

@@ -18,6 +18,7 @@
 //! `[medium]`; `media` the `[media]` and where they are; `error` defines [`SceneError`] and [`Place`].
 
 mod ctx;
+mod disney;
 mod error;
 mod lights;
 mod materials;

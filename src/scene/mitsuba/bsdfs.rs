@@ -128,6 +128,15 @@ impl Builder<'_> {
                 textures.diffuse = t;
                 m.disney = Some(self.disney(p, &mut textures)?);
             }
+            "principledthin" => {
+                let (c, t) = self.colour(p, "base_color", Vec3A::splat(0.5), SpectrumUse::Reflectance)?;
+                m.diffuse = c;
+                textures.diffuse = t;
+                m.disney = Some(self.disney_thin(p, &mut textures)?);
+                // Both sides scatter alike (`principledthin` turns the
+                // directions toward the viewer's side itself).
+                m.one_sided = false;
+            }
             "blendbsdf" | "mask" => {
                 let (weight_name, default) = if p.kind == "mask" {
                     ("opacity", 0.5)
@@ -240,7 +249,7 @@ impl Builder<'_> {
             }
             other => {
                 return Err(p.error(format!(
-                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, principled, blendbsdf, mask, null, twosided, normalmap and bumpmap"
+                    "the BSDF `{other}` is not supported: caustic reads diffuse, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, principled, principledthin, blendbsdf, mask, null, twosided, normalmap and bumpmap"
                 )))
             }
         }
@@ -316,6 +325,44 @@ impl Builder<'_> {
             }
             2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
         };
+        Ok(d)
+    }
+
+    /// The parameters of `principledthin` (`src/bsdfs/principledthin.cpp`),
+    /// each but the sampling rates a number or a texture.
+    fn disney_thin(&self, p: &Plugin, textures: &mut MaterialTextures) -> Result<Disney, SceneError> {
+        type Slot = fn(&mut MaterialTextures) -> &mut Option<crate::texture::Texture>;
+        type Field = fn(&mut Disney) -> &mut f32;
+        let mut d = Disney::thin_default();
+        let weights: [(&str, f32, Field, Slot); 9] = [
+            ("roughness", 0.5, |d| &mut d.roughness, |t| &mut t.disney_roughness),
+            (
+                "anisotropic",
+                0.0,
+                |d| &mut d.anisotropic,
+                |t| &mut t.disney_anisotropic,
+            ),
+            ("spec_trans", 0.0, |d| &mut d.spec_trans, |t| &mut t.disney_spec_trans),
+            ("spec_tint", 0.0, |d| &mut d.spec_tint, |t| &mut t.disney_spec_tint),
+            ("sheen", 0.0, |d| &mut d.sheen, |t| &mut t.disney_sheen),
+            ("sheen_tint", 0.0, |d| &mut d.sheen_tint, |t| &mut t.disney_sheen_tint),
+            ("flatness", 0.0, |d| &mut d.flatness, |t| &mut t.disney_flatness),
+            ("diff_trans", 0.0, |d| &mut d.diff_trans, |t| &mut t.disney_diff_trans),
+            ("eta", 1.5, |d| &mut d.eta, |t| &mut t.disney_eta),
+        ];
+        for (name, default, field, slot) in &weights {
+            let (value, texture) = self.scalar(p, name, *default)?;
+            *field(&mut d) = value;
+            *slot(textures) = texture;
+        }
+        if textures.disney_eta.is_none() && d.eta <= 0.0 {
+            return Err(p.error(format!("`eta` = {} must be > 0", d.eta)));
+        }
+        let rate = |name: &str| p.float_checked(name, 1.0, "a sampling rate ≥ 0", |r| r >= 0.0);
+        d.diffuse_sampling_rate = rate("diffuse_reflectance_sampling_rate")?;
+        d.specular_sampling_rate = rate("specular_reflectance_sampling_rate")?;
+        d.specular_transmission_sampling_rate = rate("specular_transmittance_sampling_rate")?;
+        d.diffuse_transmission_sampling_rate = rate("diffuse_transmittance_sampling_rate")?;
         Ok(d)
     }
 

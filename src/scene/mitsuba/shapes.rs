@@ -374,7 +374,13 @@ impl Builder<'_> {
             } else {
                 material.emission = radiance;
             }
-            material.name = format!("{}+{}", material.name, e.element.attr("id").unwrap_or("area"));
+            // Each emitter its own name: two lamps sharing one BSDF are
+            // two materials (`caustic convert` writes each by name).
+            let emitter = e
+                .element
+                .attr("id")
+                .map_or_else(|| format!("area@{}", e.origin().place), str::to_string);
+            material.name = format!("{}+{emitter}", material.name);
         }
         let index = self.materials.len() as u32;
         self.materials.push(material);

@@ -4,7 +4,7 @@
 
 use super::{num, path_from, string, unsupported, vec3, WriteError};
 use crate::math::Vec3A;
-use crate::scene::{Material, MaterialTextures, Scene, ShadingModel};
+use crate::scene::{Disney, Material, MaterialTextures, Scene, ShadingModel};
 use crate::texture::{ColourSpace, Texture, UvTransform};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -122,11 +122,8 @@ fn material(m: &Material, dir: &Path) -> Result<Table, WriteError> {
         }
         t.insert("conductor".into(), Value::Table(s));
     }
-    if m.disney.is_some() {
-        return Err(unsupported(
-            part(),
-            "Mitsuba's `principled` BSDF has no TOML spelling (caustic's `principled` table is glTF's model)",
-        ));
+    if let Some(d) = &m.disney {
+        t.insert("disney".into(), Value::Table(disney(d, tex, &scalar)?));
     }
     if m.roughness_v.is_some() && m.dielectric.is_none() && m.conductor.is_none() && m.disney.is_none() {
         return Err(unsupported(part(), "`roughness_v` without a dielectric or a conductor"));
@@ -193,6 +190,55 @@ fn material(m: &Material, dir: &Path) -> Result<Table, WriteError> {
     t.insert("microfacet".into(), string(m.microfacet.name()));
     t.insert("null".into(), Value::Boolean(m.null));
     Ok(t)
+}
+
+/// A scalar parameter as a number, or its texture when it has one.
+type Scalar<'a> = dyn Fn(f32, &Option<Texture>) -> Result<Value, WriteError> + 'a;
+
+/// `[materials.NAME.disney]`: every parameter of its variant.
+fn disney(d: &Disney, tex: &MaterialTextures, scalar: &Scalar) -> Result<Table, WriteError> {
+    let mut s = Table::new();
+    s.insert("thin".into(), Value::Boolean(d.thin));
+    let mut weights = vec![
+        ("roughness", d.roughness, &tex.disney_roughness),
+        ("anisotropic", d.anisotropic, &tex.disney_anisotropic),
+        ("spec_trans", d.spec_trans, &tex.disney_spec_trans),
+        ("spec_tint", d.spec_tint, &tex.disney_spec_tint),
+        ("sheen", d.sheen, &tex.disney_sheen),
+        ("sheen_tint", d.sheen_tint, &tex.disney_sheen_tint),
+        ("flatness", d.flatness, &tex.disney_flatness),
+        ("eta", d.eta, &tex.disney_eta),
+    ];
+    if d.thin {
+        weights.push(("diff_trans", d.diff_trans, &tex.disney_diff_trans));
+    } else {
+        weights.push(("metallic", d.metallic, &tex.disney_metallic));
+        weights.push(("clearcoat", d.clearcoat, &tex.disney_clearcoat));
+        weights.push(("clearcoat_gloss", d.clearcoat_gloss, &tex.disney_clearcoat_gloss));
+    }
+    for (key, value, texture) in weights {
+        s.insert(key.into(), scalar(value, texture)?);
+    }
+    let mut rates = vec![
+        ("diffuse_sampling_rate", d.diffuse_sampling_rate),
+        ("specular_sampling_rate", d.specular_sampling_rate),
+    ];
+    if d.thin {
+        rates.push((
+            "specular_transmission_sampling_rate",
+            d.specular_transmission_sampling_rate,
+        ));
+        rates.push((
+            "diffuse_transmission_sampling_rate",
+            d.diffuse_transmission_sampling_rate,
+        ));
+    } else {
+        rates.push(("clearcoat_sampling_rate", d.clearcoat_sampling_rate));
+    }
+    for (key, value) in rates {
+        s.insert(key.into(), num(value));
+    }
+    Ok(s)
 }
 
 /// `emission` (and `emission_strength` for a textured one, whose texels
