@@ -216,6 +216,7 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
             photons: 0,
             accel: "kdtree".into(),
             fingerprint: "0".repeat(64),
+            fingerprint_format: caustic::job::fingerprint::FINGERPRINT_FORMAT,
             output: Default::default(),
             shard: None,
         };

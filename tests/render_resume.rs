@@ -120,6 +120,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         photons: 20_000,
         accel: "kdtree".into(),
         fingerprint: caustic::job::fingerprint(&scene, AccelKind::KdTree, ""),
+        fingerprint_format: caustic::job::fingerprint::FINGERPRINT_FORMAT,
         output: Default::default(),
         shard: None,
     };

@@ -218,6 +218,38 @@ fn resuming_a_different_render_is_refused() {
         "{}",
         stderr(&out)
     );
+    // A checkpoint of the first fingerprint format (no
+    // `caustic.fingerprint.format`): refused, saying why and what to do.
+    write_as_fingerprint_format_1(&ckpt);
+    let out = resume(&[], "scenes/test/shadow.toml");
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("written by an older caustic (fingerprint format 1; this one writes format 2")
+            && err.contains("render again without it"),
+        "{err}"
+    );
+}
+
+/// Rewrites a checkpoint as caustic wrote it before the fingerprint format
+/// was recorded (format 1: no `caustic.fingerprint.format` attribute).
+fn write_as_fingerprint_format_1(path: &Path) {
+    use exr::prelude::*;
+    let mut image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    let removed = image
+        .layer_data
+        .attributes
+        .other
+        .remove(&Text::from("caustic.fingerprint.format"));
+    assert!(removed.is_some());
+    image.write().to_file(path).unwrap();
 }
 
 #[test]

@@ -329,6 +329,40 @@ fn merge_refuses_what_does_not_belong_together_naming_the_file() {
         None,
         &["edited1.exr", "damaged or edited", "width 64"],
     );
+    // A partial whose fingerprint another format computed (an older
+    // caustic's): not comparable, refused saying so.
+    let mut meta = t1.meta.clone();
+    meta.fingerprint_format = 1;
+    write_checkpoint(&p("old1.exr"), &t1.accumulation, &meta).unwrap();
+    refuse(
+        &["t0.exr", "old1.exr", "t2.exr"],
+        Some(&out),
+        None,
+        &[
+            "old1.exr",
+            "written by another caustic",
+            "fingerprint format 1 here, 2 there",
+        ],
+    );
+    // Partials all of the older format still merge among themselves.
+    for i in [0, 2] {
+        let c = read_checkpoint(&p(&format!("t{i}.exr"))).unwrap();
+        let meta = caustic::film::CheckpointMeta {
+            fingerprint_format: 1,
+            ..c.meta
+        };
+        write_checkpoint(&p(&format!("old{i}.exr")), &c.accumulation, &meta).unwrap();
+    }
+    merge(
+        &[p("old0.exr"), p("old1.exr"), p("old2.exr")],
+        None,
+        Some(&p("old-merged.exr")),
+    )
+    .unwrap();
+    assert_eq!(
+        read_checkpoint(&p("old-merged.exr")).unwrap().meta.fingerprint_format,
+        1
+    );
     // And the good set merges.
     merge(&[p("t2.exr"), p("t0.exr"), p("t1.exr")], Some(&out), None).unwrap();
     assert!(out.exists());

@@ -59,6 +59,19 @@ impl Disney {
         }
     }
 
+    /// The lobe kinds present: the diffuse base, sheen and retro-reflection,
+    /// the glossy specular and clear-coat lobes (roughness is clamped to
+    /// α ≥ 0.001, never a delta), and refraction when `spec_trans > 0`.
+    pub(super) fn flags(&self) -> super::LobeFlags {
+        use super::LobeFlags as F;
+        let f = F::DIFFUSE | F::GLOSSY | F::REFLECTION;
+        if self.params.spec_trans > 0.0 {
+            f | F::TRANSMISSION
+        } else {
+            f
+        }
+    }
+
     /// Weight of the diffuse base, `(1 − metallic)(1 − spec_trans)`.
     fn brdf_weight(&self) -> f32 {
         (1.0 - self.params.metallic) * (1.0 - self.params.spec_trans)

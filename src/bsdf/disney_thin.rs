@@ -85,6 +85,19 @@ impl DisneyThin {
         self.microfacet.is_anisotropic() || self.transmission.is_anisotropic()
     }
 
+    /// Diffuse (and sheen) and glossy reflection, and transmission through
+    /// the sheet when `spec_trans` or `diff_trans` is above 0 (the
+    /// roughnesses are clamped to α ≥ 0.001: never a delta).
+    pub(super) fn flags(&self) -> super::LobeFlags {
+        use super::LobeFlags as F;
+        let f = F::DIFFUSE | F::GLOSSY | F::REFLECTION;
+        if self.params.spec_trans > 0.0 || self.params.diff_trans > 0.0 {
+            f | F::TRANSMISSION
+        } else {
+            f
+        }
+    }
+
     /// `diff_trans` on Mitsuba's internal scale, [0, 1].
     fn diff_trans(&self) -> f32 {
         self.params.diff_trans / 2.0

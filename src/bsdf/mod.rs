@@ -22,6 +22,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod disney;
 pub mod disney_thin;
+pub mod flags;
 pub mod fresnel;
 pub mod microfacet;
 pub mod null;
@@ -32,6 +33,7 @@ pub mod rough_plastic;
 pub mod specular;
 
 pub use crate::scene::FresnelModel;
+pub use flags::{material_flags, LobeFlags};
 pub use specular::{fresnel_schlick, reflect, refract, DielectricInterface};
 
 use crate::math::{Vec2, Vec3A};
@@ -213,19 +215,23 @@ impl Lobe<'_> {
         }
     }
 
-    /// Has a lobe that is not a delta (worth sampling lights for).
-    fn is_smooth_only(&self) -> bool {
-        if let Lobe::Principled(p) = self {
-            return p.is_smooth_only();
+    /// The lobe kinds this lobe samples (each kind's declaration).
+    fn flags(&self) -> LobeFlags {
+        use LobeFlags as F;
+        match self {
+            Lobe::Lambert(_) => F::DIFFUSE | F::REFLECTION,
+            Lobe::Highlight(_) => F::GLOSSY | F::REFLECTION,
+            Lobe::Mirror(_) | Lobe::SmoothConductor(_) => F::SPECULAR | F::REFLECTION,
+            Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) => F::SPECULAR | F::REFLECTION | F::TRANSMISSION,
+            Lobe::RoughDielectric(_) => F::GLOSSY | F::REFLECTION | F::TRANSMISSION,
+            Lobe::RoughConductor(_) => F::GLOSSY | F::REFLECTION,
+            Lobe::Plastic(_) => F::DIFFUSE | F::SPECULAR | F::REFLECTION,
+            Lobe::RoughPlastic(_) => F::DIFFUSE | F::GLOSSY | F::REFLECTION,
+            Lobe::Principled(p) => p.flags(),
+            Lobe::Disney(d) => d.flags(),
+            Lobe::DisneyThin(d) => d.flags(),
+            Lobe::Null(_) => F::PASS_THROUGH,
         }
-        matches!(
-            self,
-            Lobe::Mirror(_)
-                | Lobe::SmoothDielectric(_)
-                | Lobe::ThinDielectric(_)
-                | Lobe::SmoothConductor(_)
-                | Lobe::Null(_)
-        )
     }
 }
 
@@ -455,9 +461,14 @@ impl<'a> Bsdf<'a> {
         self.count == 0
     }
 
+    /// The union of the lobes' kinds at this shading point.
+    pub fn flags(&self) -> LobeFlags {
+        self.lobes().iter().fold(LobeFlags::NONE, |f, (l, _)| f | l.flags())
+    }
+
     /// Has a non-delta lobe: light sampling can find it.
     pub fn has_smooth_lobe(&self) -> bool {
-        self.lobes().iter().any(|(l, _)| !l.is_smooth_only())
+        self.flags().is_non_specular()
     }
 
     /// Only delta lobes (mirror, smooth glass or metal).
@@ -468,12 +479,7 @@ impl<'a> Bsdf<'a> {
     /// Has a delta lobe (mirror, smooth glass or metal, a clear coat): the
     /// path integrator's photon-mapped caustics start at such surfaces.
     pub fn has_delta_lobe(&self) -> bool {
-        self.lobes().iter().any(|(l, _)| match l {
-            Lobe::Null(_) => false,
-            Lobe::Plastic(_) => true,
-            Lobe::Principled(p) => p.has_delta(),
-            _ => l.is_smooth_only(),
-        })
+        self.flags().is_specular()
     }
 
     /// Mitsuba's `null` BSDF (or a blend's hole): rays pass straight through, nothing scatters.

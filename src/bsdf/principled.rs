@@ -174,15 +174,32 @@ impl Principled {
         }
     }
 
-    /// True when every lobe present is a delta (no light sampling helps).
-    pub(super) fn is_smooth_only(&self) -> bool {
-        let diffuse = (1.0 - self.metallic) * (1.0 - self.transmission) * self.base.max_element() > 0.0;
-        self.microfacet.is_none() && (self.clearcoat <= 0.0 || self.coat_microfacet.is_none()) && !diffuse
-    }
-
-    /// True when some lobe is a delta.
-    pub(super) fn has_delta(&self) -> bool {
-        self.microfacet.is_none() || (self.clearcoat > 0.0 && self.coat_microfacet.is_none())
+    /// The lobe kinds present: diffuse where the base shows, the specular
+    /// layer and the coat (delta when smooth), transmission when any.
+    pub(super) fn flags(&self) -> super::LobeFlags {
+        use super::LobeFlags as F;
+        let mut f = F::REFLECTION;
+        if (1.0 - self.metallic) * (1.0 - self.transmission) * self.base.max_element() > 0.0 {
+            f |= F::DIFFUSE;
+        }
+        // The specular layer (metal, dielectric reflection and transmission)
+        // is a delta when smooth, else microfacets.
+        f |= if self.microfacet.is_none() {
+            F::SPECULAR
+        } else {
+            F::GLOSSY
+        };
+        if self.clearcoat > 0.0 {
+            f |= if self.coat_microfacet.is_none() {
+                F::SPECULAR
+            } else {
+                F::GLOSSY
+            };
+        }
+        if self.transmission > 0.0 {
+            f |= F::TRANSMISSION;
+        }
+        f
     }
 
     /// Probability that [`sample`](Self::sample) returns a delta direction.

@@ -18,9 +18,11 @@
 //!
 //! and the header attributes `caustic.format` (= [`CHECKPOINT_FORMAT`]),
 //! `caustic.width`, `caustic.height`, `caustic.spp`, `caustic.seed`,
-//! `caustic.photons`, `caustic.accel` and `caustic.fingerprint` (all text;
-//! the fingerprint is a SHA-256 of the scene and every setting that changes
-//! the samples, see `job::fingerprint`), `caustic.tonemap` and
+//! `caustic.photons`, `caustic.accel`, `caustic.fingerprint` and
+//! `caustic.fingerprint.format` (all text; the fingerprint is a SHA-256 of
+//! the scene and every setting that changes the samples, see
+//! `job::fingerprint`, and the format the version of its encoding, 1 when
+//! absent), `caustic.tonemap` and
 //! `caustic.exposure` (display settings, so that a merge writes the same
 //! PNG), and in a **partial** (one or more shards of a split render, see
 //! [`super::shard`]) `caustic.shard.mode` (`tiles` or `samples`),
@@ -72,6 +74,9 @@ pub struct CheckpointMeta {
     pub accel: String,
     /// Fingerprint of the scene and the effective settings (hex SHA-256).
     pub fingerprint: String,
+    /// The version of the fingerprint's encoding (`job::fingerprint`);
+    /// 1 in files written before it was recorded.
+    pub fingerprint_format: u32,
     /// Tone map and exposure of the render's PNG (display only, not in the
     /// fingerprint).
     pub output: OutputSettings,
@@ -170,6 +175,7 @@ pub fn write_checkpoint(path: &Path, accumulation: &Accumulation, meta: &Checkpo
         ("caustic.photons", meta.photons.to_string()),
         ("caustic.accel", meta.accel.clone()),
         ("caustic.fingerprint", meta.fingerprint.clone()),
+        ("caustic.fingerprint.format", meta.fingerprint_format.to_string()),
         ("caustic.tonemap", tone.to_string()),
         // Debug output of f32 is the shortest text that round-trips.
         ("caustic.exposure", format!("{:?}", meta.output.exposure)),
@@ -407,6 +413,12 @@ fn parse_meta(
         photons: number("caustic.photons", text("caustic.photons")?)?,
         accel: text("caustic.accel")?,
         fingerprint: text("caustic.fingerprint")?,
+        // Files written before the format was recorded hashed format 1.
+        fingerprint_format: if has("caustic.fingerprint.format") {
+            number("caustic.fingerprint.format", text("caustic.fingerprint.format")?)?
+        } else {
+            1
+        },
         output,
         shard,
     })
@@ -437,6 +449,7 @@ mod tests {
             photons: 12_345,
             accel: "kdtree".into(),
             fingerprint: "ab".repeat(32),
+            fingerprint_format: 2,
             output: OutputSettings {
                 tone_map: ToneMap::Clamp,
                 exposure: 0.1,

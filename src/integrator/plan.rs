@@ -9,9 +9,9 @@
 //! output.
 
 use super::photon::PhotonRules;
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::material_flags;
 use crate::math::SamplerKind;
-use crate::scene::{AdaptiveGoal, CausticsMode, FresnelModel, GatherMode, IntegratorKind, Light, SampleSharing, Scene};
+use crate::scene::{AdaptiveGoal, CausticsMode, GatherMode, IntegratorKind, Light, SampleSharing, Scene};
 use std::fmt;
 
 /// Bounces before the path integrator's Russian roulette may end a path.
@@ -324,7 +324,7 @@ impl RenderPlan {
             if m.is_specular() {
                 specular_objects += 1;
             }
-            if Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance).has_delta_lobe() {
+            if material_flags(m).is_specular() {
                 delta_objects += 1;
             }
             if m.spawns_secondary() {
@@ -917,5 +917,69 @@ mod tests {
         s.lights.clear();
         assert!(RenderPlan::new(&s).to_string().contains("skipped (no lights)"));
         assert_eq!(RenderPlan::new(&s).photons, PhotonPlan::NoLights);
+    }
+
+    /// The path integrator's caustic map is emitted toward the objects whose
+    /// lobe flags have a specular lobe somewhere: a blend with a glass
+    /// side and glTF's smooth principled glass count, a blend of diffuse
+    /// and a hole, a rough principled metal and a diffuse surface do not.
+    #[test]
+    fn physical_casters_are_chosen_by_lobe_flags() {
+        use crate::scene::{Blend, CausticsMode, Dielectric, Principled};
+        let mut s = scene(1, SampleSharing::Spread, true);
+        s.settings.integrator = IntegratorKind::Path;
+        s.settings.photons.caustics = CausticsMode::Map;
+        let white = Material::diffuse("white", Vec3A::ONE);
+        let glass = Material {
+            dielectric: Some(Dielectric::smooth(1.5, Vec3A::ONE)),
+            ..Material::diffuse("glass", Vec3A::ZERO)
+        };
+        let blend = |first: Option<Material>, second: Option<Material>| Material {
+            blend: Some(Box::new(Blend {
+                weight: 0.3,
+                weight_texture: None,
+                first,
+                second,
+            })),
+            ..Material::diffuse("blend", Vec3A::ONE)
+        };
+        let principled = |roughness: f32, metallic: f32, transmission: f32| Material {
+            principled: Some(Principled {
+                roughness,
+                metallic,
+                transmission,
+                thin: false,
+                ..Principled::default()
+            }),
+            ..Material::diffuse("principled", Vec3A::splat(0.8))
+        };
+        s.materials = vec![
+            white.clone(),
+            blend(Some(white.clone()), Some(glass)),
+            principled(0.0, 0.0, 1.0),
+            blend(Some(white), None),
+            principled(0.5, 1.0, 0.0),
+        ];
+        let ball = |material: u32| Object {
+            name: "ball".into(),
+            shape: Shape::Sphere(Sphere {
+                center: Vec3A::X * material as f32 * 3.0,
+                radius: 1.0,
+            }),
+            material,
+        };
+        s.objects = (0..5).map(ball).collect();
+        let casters = |s: &Scene| match RenderPlan::new(s).photons {
+            PhotonPlan::Run { casters, .. } => casters,
+            other => panic!("no photon pass: {other:?}"),
+        };
+        assert_eq!(casters(&s), 2);
+        assert_eq!(super::super::photon::emit::delta_casters(&s).len(), 2);
+        // Without the blend's glass side, one caster is left.
+        s.objects.remove(1);
+        assert_eq!(casters(&s), 1);
+        // Only the hole and the rough metal: no caster, no pass.
+        s.objects.remove(1);
+        assert_eq!(RenderPlan::new(&s).photons, PhotonPlan::NoSpecularCaster);
     }
 }

@@ -91,6 +91,16 @@ pub fn merge_partials(request: &MergeRequest) -> Result<MergeReport, JobError> {
     let (first_path, first, first_set) = (first_path.as_path(), &first, &first_set);
     let mut owner: BTreeMap<u32, &Path> = BTreeMap::new();
     for (path, meta, set) in &metas {
+        if meta.fingerprint_format != first.fingerprint_format {
+            return Err(invalid(format!(
+                "{}: written by another caustic than {} (fingerprint format {} here, {} there): partials of one \
+                 render come from one caustic",
+                path.display(),
+                first_path.display(),
+                meta.fingerprint_format,
+                first.fingerprint_format
+            )));
+        }
         if meta.fingerprint != first.fingerprint {
             return Err(invalid(format!(
                 "{}: a partial of a different render than {} ({})",

@@ -545,6 +545,12 @@ impl RenderJob {
             ));
         }
         if let (Some(c), Some(path)) = (&resumed, &request.resume) {
+            if let Some(why) = fingerprint::format_refusal(c.meta.fingerprint_format) {
+                return Err(JobError::Invalid(format!(
+                    "{}: the checkpoint was {why}",
+                    path.display()
+                )));
+            }
             if c.meta.fingerprint != meta.fingerprint {
                 return Err(JobError::Invalid(format!(
                     "{}: the checkpoint is of a different render ({}); resume with the scene and settings it was started with",
@@ -893,6 +899,7 @@ pub fn checkpoint_meta(scene: &Scene, accel: AccelKind, options: &AccelOptions) 
         photons: st.photons.count,
         accel: accel.name().to_string(),
         fingerprint: fingerprint(scene, accel, &options.fingerprint_text(accel)),
+        fingerprint_format: fingerprint::FINGERPRINT_FORMAT,
         output: st.output,
         shard: None,
     }

@@ -116,12 +116,11 @@ pub fn casters_where(scene: &Scene, keep: impl Fn(&crate::scene::Material) -> bo
         .collect()
 }
 
-/// The objects whose BSDF has a delta lobe: the casters of the
-/// physically based caustic map.
+/// The objects whose BSDF has a delta lobe somewhere (its lobe flags,
+/// `bsdf::material_flags`: either side of a blend, a textured roughness
+/// that may be smooth): the casters of the physically based caustic map.
 pub fn delta_casters(scene: &Scene) -> Vec<Caster> {
-    casters_where(scene, |m| {
-        Bsdf::for_material(m, FresnelModel::Exact, Transport::Importance).has_delta_lobe()
-    })
+    casters_where(scene, |m| crate::bsdf::material_flags(m).is_specular())
 }
 
 /// Delta bounces the path integrator's caustic photons follow, and the most

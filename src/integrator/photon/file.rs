@@ -10,7 +10,7 @@
 //!
 //! | bytes | content |
 //! | --- | --- |
-//! | 16 | magic `caustic-photon1\n` |
+//! | 16 | magic `caustic-photon2\n` |
 //! | 64 | the photon fingerprint (hex SHA-256 of the scene and every setting the photons depend on) |
 //! | 8 × 4 | photons emitted, rays traced, photons stored `n`, sites `m` |
 //! | 12 `n` | positions (3 × f32) |
@@ -29,8 +29,13 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use thiserror::Error;
 
-/// The first bytes of a photon file (format version 1).
-pub const PHOTON_FILE_MAGIC: &[u8; 16] = b"caustic-photon1\n";
+/// The first bytes of a photon file (format version 2: the layout of
+/// version 1, with a fingerprint of `job::fingerprint`'s format 2).
+pub const PHOTON_FILE_MAGIC: &[u8; 16] = b"caustic-photon2\n";
+
+/// The first bytes of a version 1 file, whose fingerprint (format 1) this
+/// caustic no longer computes: refused with a message that says so.
+const PHOTON_FILE_MAGIC_1: &[u8; 16] = b"caustic-photon1\n";
 
 const HEADER_BYTES: u64 = 16 + 64 + 32;
 
@@ -114,8 +119,15 @@ pub fn read_photons(path: &Path) -> Result<(TracedPhotons, String), PhotonFileEr
         return Err(invalid(format!("{length} bytes, shorter than the header")));
     }
     r.read_exact(&mut header).map_err(io)?;
+    if &header[..16] == PHOTON_FILE_MAGIC_1 {
+        return Err(invalid(
+            "written by an older caustic (photon file format 1, fingerprint format 1; this one writes format 2 and \
+             cannot check the older fingerprint against the scene): trace the photons again with caustic photons"
+                .to_string(),
+        ));
+    }
     if &header[..16] != PHOTON_FILE_MAGIC {
-        return Err(invalid("it does not start with caustic-photon1".to_string()));
+        return Err(invalid("it does not start with caustic-photon2".to_string()));
     }
     let fingerprint = std::str::from_utf8(&header[16..80])
         .ok()
