@@ -20,6 +20,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod disney;
+pub mod energy;
 pub mod fresnel;
 pub mod microfacet;
 pub mod null;
