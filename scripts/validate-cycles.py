@@ -9,7 +9,7 @@ Usage:
   python3 -m pip install mitsuba numpy   # reads caustic's multi-channel EXR
   scripts/validate-cycles.py FILE.gltf|FILE.glb [...] [--blender PYTHON]
       [--width 256] [--height 256] [--spp-caustic 256] [--spp-cycles 256] [--max-depth 64]
-      [--out DIR] [--sun LUX] [--build-scene]
+      [--out DIR] [--sun LUX] [--build-scene] [--quads] [--match-model]
 
 Both renderers read one file. A file without a camera gets one written into
 a copy of it first (framing the bounding box Blender computes, 40° vertical
@@ -23,6 +23,12 @@ adds a `KHR_lights_punctual` directional light of that illuminance instead
 `--build-scene` first builds a test scene in Blender and exports it as glTF
 (a textured metallic-roughness sphere, a transmissive sphere, an emissive
 panel and a point light on a floor), then validates that file too.
+`--quads` also validates six single-material quads (grey, white and black
+dielectrics of roughness 0.5 and 1, metals of roughness 0.5 and 1) under a
+point light, which isolate the specular lobes, their multiple-scattering
+compensation and the layering of the base. `--match-model` sets Blender's
+Principled BSDFs to single-scattering `GGX` instead of Blender's default
+`Multiscatter GGX`, to tell the compensation apart from the rest.
 
 Cycles runs with its defaults for a physically based comparison: CPU, no
 denoising, no adaptive sampling, no clamping, no glossy blur, reflective and
@@ -92,6 +98,14 @@ def blender_job(job):
         if not cams:
             raise SystemExit("the file has no camera")
         scene.camera = sorted(cams, key=lambda o: o.name)[0]
+        if job.get("match_model"):
+            # Single-scattering GGX in every Principled BSDF: isolates
+            # the multiple-scattering compensation of Blender's default.
+            for mat in bpy.data.materials:
+                if mat.use_nodes:
+                    for node in mat.node_tree.nodes:
+                        if node.type == "BSDF_PRINCIPLED":
+                            node.distribution = "GGX"
         scene.render.engine = "CYCLES"
         c = scene.cycles
         c.device = "CPU"
@@ -211,6 +225,55 @@ def build_test_scene(path):
     bpy.context.scene.collection.objects.link(obj)
 
     bpy.ops.export_scene.gltf(filepath=path, export_format="GLTF_SEPARATE", export_lights=True, export_cameras=True)
+
+
+# Single-material quads under a point light (`--quads`): one lobe at a time.
+QUADS = [
+    # name, base colour, metallic, roughness
+    ("dielectric-0.5", (0.5, 0.5, 0.5), 0.0, 0.5),
+    ("dielectric-1", (0.5, 0.5, 0.5), 0.0, 1.0),
+    ("white-dielectric-1", (1.0, 1.0, 1.0), 0.0, 1.0),
+    ("black-dielectric-1", (0.0, 0.0, 0.0), 0.0, 1.0),
+    ("metal-0.5", (0.5, 0.5, 0.5), 1.0, 0.5),
+    ("metal-1", (0.9, 0.9, 0.9), 1.0, 1.0),
+]
+
+
+def write_quad(path, base, metallic, roughness):
+    """A 2 × 2 quad of one material, a camera looking down at it and a
+    point light of 683 cd (1 W/sr after the 683 lm/W both renderers apply)."""
+    import base64
+
+    pos = [(-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)]
+    idx = [0, 2, 1, 0, 3, 2]
+    data = b"".join(struct.pack("<3f", *p) for p in pos)
+    data += b"".join(struct.pack("<3f", 0, 1, 0) for _ in pos)
+    data += struct.pack("<6H", *idx)
+    cam = [0.0, 1.6, 2.4]
+    n = math.sqrt(sum(c * c for c in cam))
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0},
+                  {"camera": 0, "translation": cam, "rotation": look_rotation([-c / n for c in cam])},
+                  {"translation": [0.6, 1.6, 0.8], "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.9, "aspectRatio": 1.0, "znear": 0.01}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 683.0}]}},
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": list(base) + [1.0],
+                                                "metallicFactor": metallic, "roughnessFactor": roughness}}],
+        "buffers": [{"byteLength": len(data),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 96, "byteLength": 12}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                       "min": [-1, 0, -1], "max": [1, 0, 1]},
+                      {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+                      {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+    }
+    with open(path, "w") as f:
+        json.dump(doc, f)
 
 
 # ------------------------------------------------------------------ main side
@@ -393,6 +456,10 @@ def main():
                    help="Cycles' bounce limits (caustic's path integrator ends paths by Russian roulette)")
     p.add_argument("--sun", type=float, default=None, help="add a directional light of this many lux")
     p.add_argument("--build-scene", action="store_true")
+    p.add_argument("--quads", action="store_true",
+                   help="also validate single-material quads under a point light")
+    p.add_argument("--match-model", action="store_true",
+                   help="set Blender's Principled BSDFs to single-scattering GGX (not Blender's default)")
     p.add_argument("--out", default="cycles-validation")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -402,6 +469,12 @@ def main():
         os.makedirs(os.path.dirname(built), exist_ok=True)
         run_blender(args.blender, {"kind": "build", "gltf": built})
         files.append(built)
+    if args.quads:
+        os.makedirs(os.path.join(args.out, "quads"), exist_ok=True)
+        for name, base, metallic, roughness in QUADS:
+            quad = os.path.abspath(os.path.join(args.out, "quads", name + ".gltf"))
+            write_quad(quad, base, metallic, roughness)
+            files.append(quad)
     if not files:
         p.error("no glTF file given")
     print("| file | mean ratio R G B | block ratios (min – max) | relMSE | caustic s | Cycles s |")
@@ -415,7 +488,7 @@ def main():
             "kind": "render", "gltf": os.path.abspath(file), "exr": os.path.join(work, "cycles.exr"),
             "npy": os.path.join(work, "cycles.npy"), "result": result, "spp": args.spp_cycles,
             "seed": 1, "max_depth": args.max_depth, "width": args.width, "height": args.height,
-            "world": world})
+            "world": world, "match_model": args.match_model})
         cycles_seconds = json.load(open(result))["seconds"]
         exr = os.path.join(work, "caustic.exr")
         cmd = [args.caustic, "render", file, "--exr", exr, "--integrator", "path",

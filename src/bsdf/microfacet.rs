@@ -128,6 +128,17 @@ impl Microfacet {
         self.g1(wi, m) * self.g1(wo, m)
     }
 
+    /// Height-correlated Smith masking–shadowing (Heitz 2014, eq. 99),
+    /// `1 / (1 + Λ(wi) + Λ(wo))` with `G1 = 1 / (1 + Λ)`: the form glTF's
+    /// `V_GGX` and Cycles use; it masks less than the separable product.
+    pub fn g_correlated(&self, wi: Vec3A, wo: Vec3A, m: Vec3A) -> f32 {
+        let (gi, go) = (self.g1(wi, m), self.g1(wo, m));
+        if gi <= 0.0 || go <= 0.0 {
+            return 0.0;
+        }
+        1.0 / (1.0 / gi + 1.0 / go - 1.0)
+    }
+
     /// Density (solid angle of `m`) with which [`sample_normal`](Self::sample_normal)
     /// draws `m` seen from `v`: for GGX the visible normals,
     /// `G1(v, m) |v·m| D(m) / |cos θv|`; for Beckmann `D(m) cos θm`.

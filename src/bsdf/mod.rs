@@ -22,6 +22,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod disney;
 pub mod disney_thin;
+pub mod energy;
 pub mod flags;
 pub mod fresnel;
 pub mod microfacet;

@@ -1,30 +1,49 @@
 //! glTF 2.0's metallic-roughness material (the specification's Appendix B,
 //! "BRDF Implementation", with `KHR_materials_transmission`, `_volume` and
-//! `_clearcoat`), in the local frame (+z outward):
+//! `_clearcoat`), in the local frame (+z outward), with the energy its
+//! single-scattering microfacet lobes lose given back (Kulla & Conty 2017)
+//! and the base layered under the specular layer by albedo scaling:
 //!
 //! ```text
-//! dielectric = fresnel_mix(F_d, base = (1 − t)·lambert(c) + t·c·btdf(α), layer = spec(α))
-//! metal      = spec(α) · F_schlick(F0 = c)
+//! dielectric = (1 − t)·c/π·(1 − max(E_s(μo), E_s(μi))) + t·c·btdf(α)
+//!            + spec(α)·F_d·(1 + (1 − t)(k_d(μo) − 1))
+//! metal      = spec(α)·F_schlick(F0 = c)·k_m(μo)
 //! material   = (1 − m)·dielectric + m·metal
 //! coated     = (1 − k·F_k(n·v))·material + k·F_k(n·v)·spec(α_k)
 //! ```
 //!
 //! with `c` the base colour, `m` metalness, `t` transmission, `k` the clear
-//! coat, `α = roughness²`, `spec` GGX with Smith masking (Walter et al. 2007)
-//! and `F_d` the exact dielectric Fresnel reflectance at the micro-normal
-//! (Cycles' choice; the specification's Schlick is its approximation). The
-//! diffuse base is weighted by `1 − F_d` at the macro normal, as the
-//! specification weights what its clear coat lets through.
+//! coat, `α = roughness²`, `spec` GGX (Walter et al. 2007) with the
+//! height-correlated Smith masking of glTF's `V_GGX` (Heitz 2014), and `F_d`
+//! the exact dielectric Fresnel reflectance at the micro-normal (Cycles'
+//! choice; the specification's Schlick is its approximation).
+//!
+//! `k = 1 + F_ms (1 − E(μo)) / E(μo)`, `F_ms = F_avg E_avg / (1 − F_avg (1 − E_avg))`
+//! gives back the energy single scattering loses to the microfacets'
+//! missing inter-reflections (Kulla & Conty 2017, in the scaling form of
+//! Turquin 2019 that Cycles and Filament use; [`super::energy`] holds the
+//! albedos `E`, `E_avg`), with `F_avg` the dielectric's or, per channel,
+//! Schlick's hemispherical average: a white rough metal reflects all the
+//! light instead of losing up to 60 % of it at roughness 1.
+//! `E_s(μ) = E_F(μ) k_d(μ)` is the specular layer's directional albedo
+//! (`F_d(μ)` when smooth), and the base receives what the layer reflects
+//! neither toward `wo` nor toward `wi`, the reciprocal form of albedo
+//! scaling that `KHR_materials_sheen` specifies; the specification's
+//! `1 − F(v·h)` lets the sum reflect more than it receives at grazing
+//! angles, and `1 − F(n·v)` darkens rough surfaces, whose layer reflects
+//! less than `F(n·v)`. The dielectric's compensation is weighted by `1 − t`
+//! so that with the transmission it stays within the light it receives.
 //! Transmission refracts through a solid (`KHR_materials_volume`) or, on a
 //! thin wall, leaves on the other side without bending. Lobes whose `α` is
 //! below [`SMOOTH_ALPHA`] are deltas. Seen from inside a solid, the surface
 //! is the dielectric interface alone, tinted by the base colour.
 //!
 //! Each sample picks one of four strategies (coat, specular reflection,
-//! transmission, diffuse) with probabilities from their Fresnel-weighted
-//! albedos at `wo`; the density is the mixture's (one-sample MIS).
+//! transmission, diffuse) with probabilities from their albedos at `wo`;
+//! the density is the mixture's (one-sample MIS).
 
 use super::dielectric::{half_vector, refract, RoughDielectric, SmoothDielectric};
+use super::energy;
 use super::fresnel;
 use super::microfacet::{Microfacet, SMOOTH_ALPHA};
 use super::{BsdfSample, FresnelModel, Transport};
@@ -100,7 +119,7 @@ fn schlick_rgb(f0: Vec3A, cos: f32) -> Vec3A {
 /// visible normal.
 #[inline]
 fn reflection_lobe(mf: &Microfacet, wo: Vec3A, wi: Vec3A, wm: Vec3A) -> (f32, f32) {
-    let f = mf.d(wm) * mf.g(wi, wo, wm) / (4.0 * wo.z * wi.z).abs();
+    let f = mf.d(wm) * mf.g_correlated(wi, wo, wm) / (4.0 * wo.z * wi.z).abs();
     let pdf = mf.pdf_normal(wo, wm) / (4.0 * wo.dot(wm).abs());
     (f, pdf)
 }
@@ -136,17 +155,56 @@ impl Principled {
         (1.0 - r, r)
     }
 
+    /// The dielectric layer's compensation `k_d` at `μ` (1 when smooth).
+    fn dielectric_compensation(&self, mu: f32) -> f32 {
+        match &self.microfacet {
+            Some(mf) if self.metallic < 1.0 => {
+                energy::compensation(mf, mu, energy::dielectric_fresnel_average(self.eta))
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// The factors that scale the specular reflection seen from `μo`: the
+    /// dielectric's `1 + (1 − t)(k_d − 1)` and the metal's `k_m` per channel.
+    fn compensation(&self, mu_o: f32) -> (f32, Vec3A) {
+        let k_d = 1.0 + (1.0 - self.transmission) * (self.dielectric_compensation(mu_o) - 1.0);
+        let k_m = match &self.microfacet {
+            Some(mf) if self.metallic > 0.0 => {
+                let f_avg = energy::schlick_fresnel_average(self.base);
+                Vec3A::new(
+                    energy::compensation(mf, mu_o, f_avg.x),
+                    energy::compensation(mf, mu_o, f_avg.y),
+                    energy::compensation(mf, mu_o, f_avg.z),
+                )
+            }
+            _ => Vec3A::ONE,
+        };
+        (k_d, k_m)
+    }
+
+    /// `E_s(μ)`: the dielectric specular layer's directional albedo with
+    /// its multiple scattering (the Fresnel reflectance when smooth).
+    fn layer_albedo(&self, mu: f32) -> f32 {
+        match &self.microfacet {
+            None => self.dielectric_fresnel(mu),
+            Some(mf) => (energy::dielectric_albedo(mf, mu, self.eta) * self.dielectric_compensation(mu)).min(1.0),
+        }
+    }
+
     fn strategies(&self, wo: Vec3A) -> Strategies {
         let (under, coat) = self.coat_split(wo);
         let f_d = self.dielectric_fresnel(wo.z);
         let dielectric = 1.0 - self.metallic;
         let base = mean(self.base);
-        let specular = dielectric * f_d + self.metallic * mean(schlick_rgb(self.base, wo.z));
+        let (k_d, k_m) = self.compensation(wo.z);
+        let specular = dielectric * f_d * k_d + self.metallic * mean(schlick_rgb(self.base, wo.z) * k_m);
+        let diffuse = dielectric * (1.0 - self.transmission) * (1.0 - self.layer_albedo(wo.z)) * base;
         let mut s = Strategies {
             coat,
             specular: under * specular,
             transmission: under * dielectric * self.transmission * (1.0 - f_d) * base,
-            diffuse: under * dielectric * (1.0 - self.transmission) * (1.0 - f_d) * base,
+            diffuse: under * diffuse,
         };
         let total = s.coat + s.specular + s.transmission + s.diffuse;
         if total > 0.0 {
@@ -235,16 +293,19 @@ impl Principled {
         let dielectric = 1.0 - self.metallic;
         if wi.z > 0.0 {
             let wm = (wo + wi).normalize();
-            // The base under the specular layer gets what the layer does
-            // not reflect at n·v (at v·h, as the specification writes it,
-            // the sum reflects up to 5 % more than it receives at grazing
-            // angles).
-            let f_n = self.dielectric_fresnel(wo.z);
-            let mut layers = self.base * (dielectric * (1.0 - self.transmission) * (1.0 - f_n) / PI);
+            // Albedo scaling, reciprocal: the base gets what the specular
+            // layer reflects neither toward `wo` nor toward `wi`.
+            let scaling = if dielectric * (1.0 - self.transmission) > 0.0 {
+                1.0 - self.layer_albedo(wo.z).max(self.layer_albedo(wi.z))
+            } else {
+                0.0
+            };
+            let mut layers = self.base * (dielectric * (1.0 - self.transmission) * scaling / PI);
             if let Some(mf) = &self.microfacet {
                 let (dg, _) = reflection_lobe(mf, wo, wi, wm);
                 let f_d = self.dielectric_fresnel(wo.dot(wm));
-                let f = Vec3A::splat(dielectric * f_d) + self.metallic * schlick_rgb(self.base, wo.dot(wm));
+                let (k_d, k_m) = self.compensation(wo.z);
+                let f = Vec3A::splat(dielectric * f_d * k_d) + self.metallic * schlick_rgb(self.base, wo.dot(wm)) * k_m;
                 layers += f * dg;
             }
             let mut out = layers * under;
