@@ -504,3 +504,13 @@ fn a_large_scene_reads_in_linear_time() {
     assert_eq!(scene.objects.len(), 40_000);
     assert!(start.elapsed().as_secs_f64() < 60.0, "{:?}", start.elapsed());
 }
+
+/// An orthographic sensor (tests/data/mitsuba/orthographic.xml: x and y
+/// scales as the half extents, a z scale moving the near plane past a
+/// sphere) against Mitsuba's render.
+#[test]
+fn an_orthographic_sensor_agrees_with_mitsuba() {
+    let (ratio, relmse) = against_mitsuba("orthographic");
+    assert!((ratio - Vec3A::ONE).abs().max_element() < 0.01, "mean ratio {ratio}");
+    assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
+}

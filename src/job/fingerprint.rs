@@ -118,6 +118,14 @@ fn fingerprint_of(
         let text = format!("fov axis {}{lens} near {:?}", c.fov_axis.name(), c.near_clip);
         field("camera lens", text.as_bytes());
     }
+    if let crate::scene::Projection::Orthographic {
+        half_width,
+        half_height,
+    } = c.projection
+    {
+        let text = format!("orthographic half extents {half_width:?} {half_height:?}");
+        field("camera projection", text.as_bytes());
+    }
     // The pixel filter, only when it moves samples (the one-pixel box keeps
     // the fingerprint of renders before filters existed).
     if !c.filter.is_pixel_box() {
@@ -401,6 +409,15 @@ mod encoding {
             cutoff: f32,
             beam_width: f32,
         },
+        /// A spot with glTF's falloff (a variant of its own, so that
+        /// Mitsuba's spots keep their fingerprints).
+        GltfSpot {
+            position: Vec3A,
+            axis: Vec3A,
+            intensity: Vec3A,
+            cutoff: f32,
+            beam_width: f32,
+        },
         Directional {
             direction: Vec3A,
             irradiance: Vec3A,
@@ -433,6 +450,13 @@ mod encoding {
                     samples: a.samples,
                 }),
                 scene::Light::Environment { radiance, .. } => Light::Environment { radiance: *radiance },
+                scene::Light::Spot(s) if s.falloff == crate::scene::light::SpotFalloff::Gltf => Light::GltfSpot {
+                    position: s.position,
+                    axis: s.axis,
+                    intensity: s.intensity,
+                    cutoff: s.cutoff,
+                    beam_width: s.beam_width,
+                },
                 scene::Light::Spot(s) => Light::Spot {
                     position: s.position,
                     axis: s.axis,
@@ -767,6 +791,19 @@ mod tests {
         let mut s = scene();
         s.camera.near_clip = 0.5;
         assert_ne!(base, fingerprint(&s, AccelKind::KdTree, ""));
+        // The projection and its scale.
+        let mut s = scene();
+        s.camera.projection = crate::scene::Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 0.0,
+        };
+        let ortho = fingerprint(&s, AccelKind::KdTree, "");
+        assert_ne!(base, ortho);
+        s.camera.projection = crate::scene::Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 3.0,
+        };
+        assert_ne!(ortho, fingerprint(&s, AccelKind::KdTree, ""));
         // The pixel filter: kind and width.
         use crate::film::filter::PixelFilter;
         let with_filter = |f: PixelFilter| {

@@ -9,7 +9,7 @@ use super::orbit::Orbit;
 use crate::film::output::write_atomically;
 use crate::film::OutputError;
 use crate::math::Vec3A;
-use crate::scene::{self, IntegratorKind, Light, Material, Scene, SceneError, ShadingModel};
+use crate::scene::{self, IntegratorKind, Light, Material, Projection, Scene, SceneError, ShadingModel};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
@@ -81,6 +81,10 @@ fn number_of(item: Option<&Item>) -> Option<f32> {
     item?.as_value().and_then(number).map(|x| x as f32)
 }
 
+/// Half the vertical field of view of the frustum an orthographic camera's
+/// orbit starts with, when the file names no point looked at.
+const ORTHOGRAPHIC_ORBIT_HALF_FOV_DEG: f32 = 20.0;
+
 /// The shortest decimal that reads back as `x` through the scene loader
 /// (which parses an f64 and rounds it to f32).
 fn toml_number(x: f32) -> Value {
@@ -147,12 +151,27 @@ impl EditableScene {
     fn from_parts(path: &Path, scene: Scene, doc: Option<DocumentMut>) -> Self {
         let cam = &scene.camera;
         let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
-        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
+        let s = &scene.settings;
+        let aspect = s.width as f32 / s.height as f32;
+        // An orthographic camera orbits a target placed where a 40° frustum
+        // spans its image height, unless the file names the point looked at.
+        let half_height = cam.half_extents(aspect).1;
+        let ahead = if cam.is_orthographic() {
+            half_height / ORTHOGRAPHIC_ORBIT_HALF_FOV_DEG.to_radians().tan()
+        } else {
+            1.0
+        };
+        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward * ahead);
         let up =
             vec3_of(camera_table.and_then(|c| c.get("up"))).unwrap_or(if doc.is_some() { Vec3A::Y } else { cam.up });
-        // The orbit keeps a vertical field of view: the file's, whatever axis it spans.
-        let s = &scene.settings;
-        let vfov = cam.vertical_fov_deg(s.width as f32 / s.height as f32);
+        // The orbit keeps a vertical field of view: the file's, whatever axis
+        // it spans; for an orthographic camera, the one whose frustum spans
+        // the image height at the target (zooming then scales the image).
+        let vfov = if cam.is_orthographic() {
+            2.0 * (half_height / (target - cam.position).length()).atan().to_degrees()
+        } else {
+            cam.vertical_fov_deg(aspect)
+        };
         let orbit = Orbit::looking_at(cam.position, target, up, vfov)
             .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, vfov))
             .expect("a valid camera has a view direction");
@@ -208,7 +227,15 @@ impl EditableScene {
             } else {
                 cam.focus_distance
             };
+            let projection = match old.projection {
+                Projection::Orthographic { .. } => Projection::Orthographic {
+                    half_width: 0.0,
+                    half_height: self.orbit.orthographic_half_height(),
+                },
+                Projection::Perspective => Projection::Perspective,
+            };
             self.scene.camera = crate::scene::Camera {
+                projection,
                 aperture_radius: old.aperture_radius,
                 focus_distance,
                 near_clip: old.near_clip,
@@ -268,8 +295,18 @@ impl EditableScene {
         set(cam, "position", toml_vec3(self.orbit.eye()));
         set(cam, "look_at", toml_vec3(self.orbit.target));
         set(cam, "up", toml_vec3(self.orbit.up));
-        set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
-        // `vfov` now says the field of view: a `fov` on another axis would contradict it.
+        if self.scene.camera.is_orthographic() {
+            set(
+                cam,
+                "half_height",
+                value(toml_number(self.orbit.orthographic_half_height())),
+            );
+            cam.remove("half_width");
+            cam.remove("vfov");
+        } else {
+            set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
+        }
+        // `vfov` (or `half_height`) now says the extent: an axis would contradict it.
         cam.remove("fov");
         cam.remove("fov_axis");
     }
