@@ -51,7 +51,10 @@ pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
         Some(s) => sampler(&s)?,
         None => (4, 0),
     };
-    let (fov_deg, fov_axis) = match p.float("fov")? {
+    // An orthographic sensor has no field of view: it leaves `fov` and
+    // `focal_length` unread, so that `finish` reports them.
+    let fov = if orthographic { None } else { p.float("fov")? };
+    let (fov_deg, fov_axis) = match fov {
         _ if orthographic => (45.0, FovAxis::X),
         Some(fov) => {
             if p.has("focal_length") {
