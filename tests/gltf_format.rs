@@ -450,3 +450,25 @@ fn the_viewer_opens_a_model() {
     // Its edits are saved as caustic TOML, not written into the model.
     assert!(e.save_camera().is_err());
 }
+
+#[test]
+fn the_viewer_keeps_an_orthographic_camera_and_zooms_it() {
+    let mut e = caustic::view::EditableScene::open(&data("ortho_quad.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    e.apply();
+    let ortho = |e: &caustic::view::EditableScene| match e.scene.camera.projection {
+        Projection::Orthographic {
+            half_width,
+            half_height,
+        } => (half_width, half_height),
+        Projection::Perspective => panic!("the orbit made the camera perspective"),
+    };
+    // The file's rectangle, so that it fits the viewer's image of any aspect.
+    let (w, h) = ortho(&e);
+    assert!((w - 2.0).abs() < 1e-5 && (h - 1.0).abs() < 1e-5, "{w} {h}");
+    assert!(close(e.scene.camera.forward, -Vec3A::Z));
+    // Zooming in one step (10 % closer) shows 10 % less, both ways.
+    e.orbit.zoom(1.0);
+    e.apply();
+    let (w, h) = ortho(&e);
+    assert!((w - 1.8).abs() < 1e-4 && (h - 0.9).abs() < 1e-4, "{w} {h}");
+}

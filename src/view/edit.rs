@@ -47,6 +47,10 @@ pub struct EditableScene {
     /// The TOML document of the file; `None` when the scene was read from
     /// another format.
     doc: Option<DocumentMut>,
+    /// The file's orthographic half width and half height, which the orbit
+    /// scales together (its zoom), so that the rectangle still fits the
+    /// viewer's image whatever its aspect ratio.
+    orthographic: Option<(f32, f32)>,
 }
 
 /// Why the viewer could not save.
@@ -150,6 +154,7 @@ impl EditableScene {
 
     fn from_parts(path: &Path, scene: Scene, doc: Option<DocumentMut>) -> Self {
         let cam = &scene.camera;
+        let scene_projection = cam.projection;
         let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
         let s = &scene.settings;
         let aspect = s.width as f32 / s.height as f32;
@@ -210,9 +215,25 @@ impl EditableScene {
             scene,
             orbit,
             initial_orbit: orbit,
+            orthographic: match scene_projection {
+                Projection::Orthographic {
+                    half_width,
+                    half_height,
+                } => Some((half_width, half_height)),
+                Projection::Perspective => None,
+            },
             lights,
             doc,
         }
+    }
+
+    /// The file's orthographic half extents scaled by the orbit's zoom
+    /// against the file's; `None` for a perspective camera.
+    fn orthographic_halves(&self) -> Option<(f32, f32)> {
+        let (w, h) = self.orthographic?;
+        let k = self.orbit.orthographic_half_height() / self.initial_orbit.orthographic_half_height();
+        let k = if k.is_finite() && k > 0.0 { k } else { 1.0 };
+        Some((w * k, h * k))
     }
 
     /// Copies the camera and the light edits into [`Self::scene`]; call after
@@ -227,12 +248,12 @@ impl EditableScene {
             } else {
                 cam.focus_distance
             };
-            let projection = match old.projection {
-                Projection::Orthographic { .. } => Projection::Orthographic {
-                    half_width: 0.0,
-                    half_height: self.orbit.orthographic_half_height(),
+            let projection = match self.orthographic_halves() {
+                Some((half_width, half_height)) => Projection::Orthographic {
+                    half_width,
+                    half_height,
                 },
-                Projection::Perspective => Projection::Perspective,
+                None => Projection::Perspective,
             };
             self.scene.camera = crate::scene::Camera {
                 projection,
@@ -295,13 +316,14 @@ impl EditableScene {
         set(cam, "position", toml_vec3(self.orbit.eye()));
         set(cam, "look_at", toml_vec3(self.orbit.target));
         set(cam, "up", toml_vec3(self.orbit.up));
-        if self.scene.camera.is_orthographic() {
-            set(
-                cam,
-                "half_height",
-                value(toml_number(self.orbit.orthographic_half_height())),
-            );
-            cam.remove("half_width");
+        if let Some((w, h)) = self.orthographic_halves() {
+            for (key, x) in [("half_width", w), ("half_height", h)] {
+                if x > 0.0 {
+                    set(cam, key, value(toml_number(x)));
+                } else {
+                    cam.remove(key);
+                }
+            }
             cam.remove("vfov");
         } else {
             set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
