@@ -19,6 +19,9 @@ chunk), so each model is one self-contained file:
 - textured_quad.gltf: a quad filling the view with a 2 × 2 base colour
   texture (red, green / blue, white), nearest filtering, lit by the
   default environment.
+- ortho_quad.gltf: the emissive quad [-1, 1]² seen 7 units away by an
+  orthographic camera of xmag 2, ymag 1 (the quad covers the middle half
+  of the image's width and all of its height).
 """
 
 import base64
@@ -259,9 +262,44 @@ def textured_quad():
     write("textured_quad.gltf", doc)
 
 
+def ortho_quad():
+    data, views, accessors = quad_buffer()
+    doc = {
+        "asset": {"version": "2.0", "generator": "caustic scripts/make-gltf-test-data.py"},
+        "buffers": [{"byteLength": len(data), "uri": data_uri("application/octet-stream", data)}],
+        "bufferViews": views,
+        "accessors": accessors,
+        "materials": [
+            {
+                "name": "sign",
+                "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1},
+                "emissiveFactor": [1, 0.5, 0.25],
+            }
+        ],
+        "meshes": [{"primitives": [{"attributes": QUAD_ATTRIBUTES, "indices": 3, "material": 0}]}],
+        "cameras": [
+            {
+                "name": "plan",
+                "type": "orthographic",
+                "orthographic": {"xmag": 2, "ymag": 1, "znear": 0.5, "zfar": 100},
+            }
+        ],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 0}]}},
+        "nodes": [
+            {"mesh": 0},
+            {"camera": 0, "translation": [0, 0, 7]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}},
+        ],
+        "scenes": [{"nodes": [0, 1, 2]}],
+    }
+    write("ortho_quad.gltf", doc)
+
+
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     nodes()
     materials()
     emissive_quad()
     textured_quad()
+    ortho_quad()

@@ -1,10 +1,11 @@
 //! The camera's keys: a field of view on any axis, a thin lens (depth of
-//! field) and a near clipping plane, from the scene file to the image.
+//! field), a near clipping plane and the orthographic projection, from the
+//! scene file to the image.
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Film;
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{parse_scene, FovAxis, Scene, SceneError};
+use caustic::scene::{parse_scene, FovAxis, Projection, Scene, SceneError};
 use std::path::Path;
 
 fn load(text: &str) -> Result<Scene, SceneError> {
@@ -183,4 +184,74 @@ fn a_filtered_render_is_the_same_on_any_thread_count() {
         pool.install(|| image(&text))
     };
     assert!(on(1).pixels == on(2).pixels, "1 and 2 threads differ");
+}
+
+#[test]
+fn orthographic_keys_are_read_and_checked() {
+    let ortho = |keys: &str| scene(&format!("projection = \"orthographic\"\n{keys}")).replace("vfov = 30\n", "");
+    let c = load(&ortho("half_width = 2\nhalf_height = 1.5")).unwrap().camera;
+    assert_eq!(
+        c.projection,
+        Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 1.5
+        }
+    );
+    // 64 × 64: the larger of the two extents wins.
+    assert_eq!(c.half_extents(1.0), (2.0, 2.0));
+    let error = |keys: &str| load(&ortho(keys)).unwrap_err().to_string();
+    let e = error("");
+    assert!(e.contains("needs `half_width` or `half_height`"), "{e}");
+    for bad in ["half_width = 0", "half_height = -1", "half_width = nan"] {
+        let e = error(bad);
+        assert!(
+            e.contains("camera.toml:11:") && (e.contains("must be > 0") || e.contains("finite")),
+            "{bad}: {e}"
+        );
+    }
+    let e = error("half_width = 1\naperture_radius = 0.1");
+    assert!(e.contains("no lens"), "{e}");
+    let e = load(&scene("projection = \"orthographic\"\nhalf_width = 1"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`vfov` is a perspective camera's"), "{e}");
+    let e = load(&scene("half_width = 1")).unwrap_err().to_string();
+    assert!(e.contains("`half_width` is an orthographic camera's"), "{e}");
+    let e = load(&scene("projection = \"fisheye\"")).unwrap_err().to_string();
+    assert!(e.contains("unknown `projection` `fisheye`"), "{e}");
+}
+
+#[test]
+fn an_orthographic_view_does_not_depend_on_the_distance() {
+    // The 4 × 4 wall fills a view of half height 2 from any distance: the
+    // images from 5 and 4.5 units away agree (the ball, at z = 4, is in
+    // front of both).
+    let at = |z: f32| {
+        image(
+            &scene("projection = \"orthographic\"\nhalf_height = 2")
+                .replace("vfov = 30\n", "")
+                .replace("position = [0.0, 0.0, 5.0]", &format!("position = [0.0, 0.0, {z}]")),
+        )
+    };
+    let (a, b) = (at(5.0), at(4.5));
+    let diff = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (*p - *q).abs().max_element())
+        .fold(0.0, f32::max);
+    assert!(diff < 1e-3, "{diff}");
+    assert!(sharpness(&a) > 0.1, "{}", sharpness(&a));
+    // The wall spans the view exactly: the border columns see the
+    // checkerboard (half 0.9, half 0.05), not the white environment;
+    // wider, they see the environment.
+    let column = |f: &Film, x: u32| (0..64).map(|y| f.get(x, y).x).sum::<f32>() / 64.0;
+    assert!(
+        column(&a, 0) < 0.6 && column(&a, 63) < 0.6,
+        "{} {}",
+        column(&a, 0),
+        column(&a, 63)
+    );
+    let wider = image(&scene("projection = \"orthographic\"\nhalf_height = 2.5").replace("vfov = 30\n", ""));
+    assert!(column(&wider, 0) > 0.99 && column(&wider, 63) > 0.99);
 }

@@ -272,3 +272,45 @@ material = "m"
         assert!(e.contains(place) && e.contains(message), "{to}: {e}");
     }
 }
+
+/// An orthographic camera and a spot light with glTF's falloff keep their
+/// keys through `caustic convert`.
+#[test]
+fn an_orthographic_camera_and_a_gltf_spot_convert_to_themselves() {
+    let text = r#"[render]
+width = 24
+height = 12
+integrator = "path"
+
+[camera]
+position = [0, 1, 5]
+look_at = [0, 0, 0]
+projection = "orthographic"
+half_width = 2.5
+half_height = 1.0
+near_clip = 0.5
+
+[materials.m]
+diffuse = 0.6
+
+[[lights]]
+type = "spot"
+position = [0, 3, 0]
+look_at = [0, 0, 0]
+cutoff_angle = 40
+beam_width = 10
+falloff = "gltf"
+intensity = 20
+
+[[objects]]
+type = "quad"
+center = [0, 0, 0]
+size = [6, 6]
+normal = [0, 1, 0]
+up = [0, 0, -1]
+material = "m"
+"#;
+    let scene = caustic::scene::parse_scene(text, Path::new("ortho.toml")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(scene.camera.is_orthographic());
+    round_trip("orthographic camera, glTF spot", &scene);
+}

@@ -9,7 +9,8 @@ mod common;
 
 use caustic::math::{Vec2, Vec3A};
 use caustic::scene::gltf::{load_gltf_scene, CameraChoice, GltfOptions, GltfScene};
-use caustic::scene::{Light, Shape};
+use caustic::scene::light::SpotFalloff;
+use caustic::scene::{Light, Projection, Shape};
 use caustic::texture::{Channel, FilterMode, Texture, WrapMode};
 use common::cli::{caustic, describe};
 use std::path::PathBuf;
@@ -86,8 +87,18 @@ fn cameras_are_chosen_by_name_node_name_or_index() {
         let s = with(ok).unwrap_or_else(|e| panic!("{ok}: {e}")).scene;
         assert!(close(s.camera.position, Vec3A::new(0.0, 0.0, 10.0)));
     }
-    let e = with("ortho").unwrap_err().to_string();
-    assert!(e.contains("/cameras/1") && e.contains("orthographic"), "{e}");
+    // The orthographic one: xmag × ymag half extents, its near plane, and an
+    // image of aspect xmag / ymag.
+    let s = with("ortho").unwrap_or_else(|e| panic!("{e}")).scene;
+    assert_eq!(
+        s.camera.projection,
+        Projection::Orthographic {
+            half_width: 1.0,
+            half_height: 1.0
+        }
+    );
+    assert!((s.camera.near_clip - 0.1).abs() < 1e-7);
+    assert_eq!((s.settings.width, s.settings.height), (600, 600));
     let e = with("7").unwrap_err().to_string();
     assert!(e.contains("no such camera") && e.contains("0 `persp`"), "{e}");
 }
@@ -118,6 +129,7 @@ fn punctual_lights_are_placed_and_converted_at_683_lumens_per_watt() {
             assert!(close(s.position, Vec3A::new(0.0, 0.0, 5.0)) && close(s.axis, -Vec3A::Z));
             assert!(close(s.intensity, Vec3A::ONE));
             assert_eq!((s.cutoff, s.beam_width), (0.5, 0.2));
+            assert_eq!(s.falloff, SpotFalloff::Gltf, "KHR_lights_punctual's smooth falloff");
         }
         other => panic!("{other:?}"),
     }
@@ -269,6 +281,64 @@ fn render_exr(model: &str, size: u32, extra: &[&str]) -> Vec<[f32; 3]> {
     img.layer_data.channel_data.pixels
 }
 
+/// Renders `model` at `width × height` (16 spp) and returns its pixels.
+fn render_size(model: &str, width: u32, height: u32) -> Vec<[f32; 3]> {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("out.exr");
+    let (w, h) = (width.to_string(), height.to_string());
+    let args = [
+        "render",
+        model,
+        "--exr",
+        exr.to_str().unwrap(),
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "--spp",
+        "4",
+        "--quiet",
+    ];
+    let o = caustic(&args);
+    assert!(o.status.success(), "{}", describe(&o));
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        &exr,
+        |res, _| vec![[0.0f32; 3]; res.width() * res.height()],
+        move |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * width as usize + pos.x()] = [r, g, b]
+        },
+    )
+    .expect("the EXR reads back");
+    img.layer_data.channel_data.pixels
+}
+
+#[test]
+fn an_orthographic_camera_shows_its_rectangle_whatever_the_image_aspect() {
+    // The quad [−1, 1]² seen by xmag 2, ymag 1 from 7 units away: at the
+    // model's aspect (2:1) it spans the middle half of the width and the
+    // whole height; in a square image the aspect ratio wins and the
+    // rectangle fits: 4 × 4 units shown, the quad in the middle half both ways.
+    let model = "tests/data/gltf/ortho_quad.gltf";
+    let g = load("ortho_quad.gltf");
+    assert_eq!((g.scene.settings.width, g.scene.settings.height), (1200, 600));
+    for (w, h, x0, x1, y0, y1) in [(40, 20, 10, 30, 0, 20), (20, 20, 5, 15, 5, 15)] {
+        let px = render_size(model, w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let p = px[(y * w + x) as usize];
+                let inside = (x0..x1).contains(&x) && (y0..y1).contains(&y);
+                let expected = if inside { [1.0, 0.5, 0.25] } else { [0.0; 3] };
+                for (c, e) in p.iter().zip(expected) {
+                    assert!(
+                        (c - e).abs() < 1e-3,
+                        "{w}×{h} pixel ({x}, {y}): {p:?}, expected {expected:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn an_emissive_quad_shows_its_radiance() {
     // Emission (1, 0.5, 0.25) × strength 2 on a black base, lit by nothing.
@@ -363,7 +433,7 @@ fn convert_writes_a_model_as_toml_that_loads_back_to_the_same_scene() {
     // `caustic convert` compares the scene it wrote, read back, with the
     // model's; it exits 0 only when they agree.
     let dir = tempfile::tempdir().unwrap();
-    for model in ["nodes.gltf", "emissive_quad.glb"] {
+    for model in ["nodes.gltf", "emissive_quad.glb", "ortho_quad.gltf"] {
         let out = dir.path().join(format!("{model}.toml"));
         let path = data(model);
         let o = caustic(&["convert", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
@@ -379,4 +449,26 @@ fn the_viewer_opens_a_model() {
     assert_eq!(e.scene.objects.len(), 2);
     // Its edits are saved as caustic TOML, not written into the model.
     assert!(e.save_camera().is_err());
+}
+
+#[test]
+fn the_viewer_keeps_an_orthographic_camera_and_zooms_it() {
+    let mut e = caustic::view::EditableScene::open(&data("ortho_quad.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    e.apply();
+    let ortho = |e: &caustic::view::EditableScene| match e.scene.camera.projection {
+        Projection::Orthographic {
+            half_width,
+            half_height,
+        } => (half_width, half_height),
+        Projection::Perspective => panic!("the orbit made the camera perspective"),
+    };
+    // The file's rectangle, so that it fits the viewer's image of any aspect.
+    let (w, h) = ortho(&e);
+    assert!((w - 2.0).abs() < 1e-5 && (h - 1.0).abs() < 1e-5, "{w} {h}");
+    assert!(close(e.scene.camera.forward, -Vec3A::Z));
+    // Zooming in one step (10 % closer) shows 10 % less, both ways.
+    e.orbit.zoom(1.0);
+    e.apply();
+    let (w, h) = ortho(&e);
+    assert!((w - 1.8).abs() < 1e-4 && (h - 0.9).abs() < 1e-4, "{w} {h}");
 }

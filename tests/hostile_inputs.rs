@@ -196,6 +196,14 @@ fn base64_decode(text: &str) -> Vec<u8> {
     base64::engine::general_purpose::STANDARD.decode(text).unwrap()
 }
 
+/// A glTF orthographic camera of half extents `xmag` × `ymag`.
+fn orthographic(xmag: f64, ymag: f64) -> serde_json::Value {
+    serde_json::json!({
+        "type": "orthographic",
+        "orthographic": {"xmag": xmag, "ymag": ymag, "znear": 0.01, "zfar": 100}
+    })
+}
+
 /// One hostile input.
 struct Case {
     /// Identifier, listed in `docs/hostile-inputs.md`.
@@ -977,6 +985,24 @@ fn cases() -> Vec<Case> {
             what: "glTF buffer data URI that is not base64",
             expect: Some(&["model.gltf: /buffers/0/uri: the data URI does not decode as base64"]),
             setup: |d| gltf_model(d, |m| m["buffers"][0]["uri"] = "data:application/octet-stream;base64,@@@".into()),
+        },
+        Case {
+            name: "gltf-orthographic-zero-xmag",
+            what: "glTF orthographic camera with `xmag` 0",
+            expect: Some(&["model.gltf: /cameras/0/orthographic/xmag: 0: must be a finite number > 0"]),
+            setup: |d| gltf_model(d, |m| m["cameras"][0] = orthographic(0.0, 1.0)),
+        },
+        Case {
+            name: "gltf-orthographic-negative-ymag",
+            what: "glTF orthographic camera with `ymag` −1",
+            expect: Some(&["model.gltf: /cameras/0/orthographic/ymag: -1: must be a finite number > 0"]),
+            setup: |d| gltf_model(d, |m| m["cameras"][0] = orthographic(1.0, -1.0)),
+        },
+        Case {
+            name: "gltf-orthographic-infinite-xmag",
+            what: "glTF orthographic camera with `xmag` 1e39 (infinite in single precision)",
+            expect: Some(&["model.gltf: /cameras/0/orthographic/xmag: inf: must be a finite number > 0"]),
+            setup: |d| gltf_model(d, |m| m["cameras"][0] = orthographic(1e39, 1.0)),
         },
         Case {
             name: "gltf-missing-image",

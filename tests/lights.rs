@@ -7,7 +7,7 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::photon::{Caster, PhotonTracer};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec2, Vec3A};
-use caustic::scene::light::Emitter;
+use caustic::scene::light::{Emitter, SpotFalloff};
 use caustic::scene::{parse_scene, Light, Scene};
 use std::f32::consts::PI;
 use std::path::Path;
@@ -51,38 +51,56 @@ fn floor_point(scene: &Scene, x: u32, y: u32) -> Vec3A {
 }
 
 #[test]
-fn a_spot_light_falls_off_as_mitsubas_spot() {
-    let scene = load(&floor_scene(
-        "[[lights]]\ntype = \"spot\"\nposition = [0.0, 1.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\n\
-         cutoff_angle = 30\nbeam_width = 15\nintensity = 2.0",
-        4,
-    ));
-    let Light::Spot(spot) = scene.lights[0] else { panic!() };
-    assert!((spot.axis - -Vec3A::Y).length() < 1e-6);
-    let f = film(&scene);
-    let mut checked = 0;
-    for y in 0..32 {
-        for x in 0..32 {
-            let p = floor_point(&scene, x, y);
-            let to = p - spot.position;
-            let d2 = to.length_squared();
-            let dir = to / d2.sqrt();
-            let falloff = spot.falloff(dir);
-            let expected = 0.5 / PI * 2.0 * falloff * dir.dot(-Vec3A::Y) / d2;
-            let got = f.pixels[(y * 32 + x) as usize].x;
-            // Pixels away from the cone's edges, where the footprint of a
-            // pixel sees one slope of the falloff.
-            let angle = dir.dot(spot.axis).acos().to_degrees();
-            if (angle - 30.0).abs() > 1.5 && (angle - 15.0).abs() > 1.5 {
-                assert!(
-                    (got - expected).abs() <= 0.02 * expected + 0.003,
-                    "pixel {x},{y} at {angle:.1}°: {got} against {expected}"
-                );
-                checked += 1;
+fn a_spot_light_falls_off_as_mitsubas_spot_or_gltfs() {
+    for (key, kind) in [("", SpotFalloff::Mitsuba), ("falloff = \"gltf\"", SpotFalloff::Gltf)] {
+        let scene = load(&floor_scene(
+            &format!(
+                "[[lights]]\ntype = \"spot\"\nposition = [0.0, 1.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+                 cutoff_angle = 30\nbeam_width = 15\nintensity = 2.0\n{key}"
+            ),
+            // Enough samples that each pixel's mean is its centre's value
+            // on glTF's steeper ramp too.
+            64,
+        ));
+        let Light::Spot(spot) = scene.lights[0] else { panic!() };
+        assert_eq!(spot.falloff, kind);
+        assert!((spot.axis - -Vec3A::Y).length() < 1e-6);
+        let f = film(&scene);
+        let mut checked = 0;
+        for y in 0..32 {
+            for x in 0..32 {
+                let p = floor_point(&scene, x, y);
+                let to = p - spot.position;
+                let d2 = to.length_squared();
+                let dir = to / d2.sqrt();
+                let falloff = spot.falloff(dir);
+                let expected = 0.5 / PI * 2.0 * falloff * dir.dot(-Vec3A::Y) / d2;
+                let got = f.pixels[(y * 32 + x) as usize].x;
+                // Pixels away from the cone's edges, where the footprint of a
+                // pixel sees one slope of the falloff.
+                let angle = dir.dot(spot.axis).acos().to_degrees();
+                if (angle - 30.0).abs() > 1.5 && (angle - 15.0).abs() > 1.5 {
+                    assert!(
+                        (got - expected).abs() <= 0.02 * expected + 0.003,
+                        "{kind:?}: pixel {x},{y} at {angle:.1}°: {got} against {expected}"
+                    );
+                    checked += 1;
+                }
             }
         }
+        assert!(checked > 600, "{checked}");
     }
-    assert!(checked > 600, "{checked}");
+    // glTF's ramp is lower than Mitsuba's between the cones (t² ≤ t).
+    let mid = |f: SpotFalloff| caustic::scene::light::SpotLight {
+        position: Vec3A::ZERO,
+        axis: -Vec3A::Y,
+        intensity: Vec3A::ONE,
+        cutoff: 30f32.to_radians(),
+        beam_width: 15f32.to_radians(),
+        falloff: f,
+    };
+    let d = Vec3A::new(22.5f32.to_radians().sin(), -22.5f32.to_radians().cos(), 0.0);
+    assert!(mid(SpotFalloff::Gltf).falloff(d) < mid(SpotFalloff::Mitsuba).falloff(d));
 }
 
 #[test]

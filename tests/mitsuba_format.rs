@@ -666,3 +666,48 @@ fn a_normal_map_on_a_mesh_without_texture_coordinates_names_the_shape() {
         "{e}"
     );
 }
+
+/// An orthographic sensor (tests/data/mitsuba/orthographic.xml: x and y
+/// scales as the half extents, a z scale moving the near plane past a
+/// sphere) against Mitsuba's render.
+#[test]
+fn an_orthographic_sensor_agrees_with_mitsuba() {
+    let (ratio, relmse) = against_mitsuba("orthographic");
+    assert!((ratio - Vec3A::ONE).abs().max_element() < 0.01, "mean ratio {ratio}");
+    assert!(relmse < RELMSE_BOUND, "relMSE {relmse}");
+}
+
+/// An orthographic sensor takes its extent from `to_world`: a `fov` is not
+/// one of its parameters, and uneven x and y scales are refused.
+#[test]
+fn an_orthographic_sensor_refuses_a_field_of_view_and_uneven_scales() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |sensor: &str| {
+        format!(
+            r#"<scene version="3.0.0"><sensor type="orthographic">{sensor}<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor><shape type="sphere"/></scene>"#
+        )
+    };
+    let ok = write(
+        dir.path(),
+        "ok.xml",
+        &scene(r#"<transform name="to_world"><scale x="2" y="2"/></transform>"#),
+    );
+    let s = load_mitsuba_scene(&ok, &[]).unwrap_or_else(|e| panic!("{e}")).scene;
+    assert_eq!(
+        s.camera.projection,
+        caustic::scene::Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 0.0
+        }
+    );
+    let fov = write(dir.path(), "fov.xml", &scene(r#"<float name="fov" value="40"/>"#));
+    let e = load_mitsuba_scene(&fov, &[]).unwrap_err().to_string();
+    assert!(e.contains("`fov` is not a parameter"), "{e}");
+    let uneven = write(
+        dir.path(),
+        "uneven.xml",
+        &scene(r#"<transform name="to_world"><scale x="2" y="1"/></transform>"#),
+    );
+    let e = load_mitsuba_scene(&uneven, &[]).unwrap_err().to_string();
+    assert!(e.contains("unevenly"), "{e}");
+}

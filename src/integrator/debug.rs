@@ -7,15 +7,15 @@ use crate::film::Film;
 use crate::math::{Aabb, Vec3, Vec3A};
 use crate::scene::{Camera, Scene};
 
-/// Pinhole projection of world points onto a `width × height` film, the
-/// inverse of `Camera::ray`.
+/// Pinhole or orthographic projection of world points onto a `width ×
+/// height` film, the inverse of `Camera::ray`.
 #[derive(Clone, Copy, Debug)]
 pub struct Projector<'c> {
     camera: &'c Camera,
     width: f32,
     height: f32,
-    tan_half: f32,
-    aspect: f32,
+    /// The camera's half extents (`Camera::half_extents`).
+    half: (f32, f32),
 }
 
 /// Points closer to the eye than this (along the view axis) are not drawn.
@@ -28,8 +28,7 @@ impl<'c> Projector<'c> {
             camera,
             width: width as f32,
             height: height as f32,
-            tan_half: camera.tan_half_vertical(width as f32 / height as f32),
-            aspect: width as f32 / height as f32,
+            half: camera.half_extents(width as f32 / height as f32),
         }
     }
 
@@ -49,8 +48,10 @@ impl<'c> Projector<'c> {
         if v.z.is_nan() || v.z <= NEAR {
             return None;
         }
-        let sx = v.x / v.z / (self.tan_half * self.aspect);
-        let sy = v.y / v.z / self.tan_half;
+        // Perspective divides by the depth; parallel rays do not.
+        let depth = if self.camera.is_orthographic() { 1.0 } else { v.z };
+        let sx = v.x / depth / self.half.0;
+        let sy = v.y / depth / self.half.1;
         Some(((sx + 1.0) * 0.5 * self.width, (1.0 - sy) * 0.5 * self.height))
     }
 
@@ -179,6 +180,17 @@ mod tests {
         }
         // Behind the camera: not drawn.
         assert!(proj.project(cam.position - cam.forward).is_none());
+        let mut ortho = cam.clone();
+        ortho.projection = crate::scene::Projection::Orthographic {
+            half_width: 1.5,
+            half_height: 1.5,
+        };
+        let proj = Projector::new(&ortho, 320, 200);
+        for (x, y) in [(10.5f32, 20.25f32), (160.0, 100.0), (300.0, 190.0)] {
+            let r = ortho.ray(x, y, 320, 200);
+            let (px, py) = proj.project(r.at(3.7)).unwrap();
+            assert!((px - x).abs() < 1e-2 && (py - y).abs() < 1e-2, "{x},{y} → {px},{py}");
+        }
     }
 
     #[test]

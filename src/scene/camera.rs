@@ -1,5 +1,6 @@
-//! The camera: a pinhole or a thin lens (depth of field), with a field of
-//! view along a chosen image axis and a near clipping distance.
+//! The camera: a pinhole or a thin lens (depth of field) with a field of
+//! view along a chosen image axis, or an orthographic projection (parallel
+//! rays from a rectangle), and a near clipping distance.
 
 use crate::film::filter::PixelFilter;
 use crate::math::sampling::concentric_disk;
@@ -47,8 +48,59 @@ impl FovAxis {
     }
 }
 
+/// How film positions become rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Projection {
+    /// Rays fan out from the eye (or the lens) across the field of view.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view axis from a rectangle centred on the
+    /// eye position. The image shows at least `half_width` either side
+    /// horizontally and `half_height` vertically (world units; 0 leaves
+    /// that extent to the image's aspect ratio): the image's aspect ratio
+    /// wins and extends the other extent, never stretching nor cropping
+    /// (glTF 2.0 §3.10.3's advice for `xmag`/`ymag`).
+    Orthographic {
+        /// Smallest half width shown (≥ 0).
+        half_width: f32,
+        /// Smallest half height shown (≥ 0; not both 0).
+        half_height: f32,
+    },
+}
+
+impl Projection {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Projection::Perspective => "perspective",
+            Projection::Orthographic { .. } => "orthographic",
+        }
+    }
+}
+
+/// The vertical half extent of an image of aspect ratio `width / height`
+/// whose half extent across `axis` is `half`.
+#[inline]
+fn vertical_half(axis: FovAxis, half: f32, aspect: f32) -> f32 {
+    let horizontal = match axis {
+        FovAxis::Y => return half,
+        FovAxis::X => true,
+        FovAxis::Diagonal => return half / (aspect * aspect + 1.0).sqrt(),
+        FovAxis::Smaller => aspect < 1.0,
+        FovAxis::Larger => aspect >= 1.0,
+    };
+    if horizontal {
+        half / aspect
+    } else {
+        half
+    }
+}
+
 /// A camera looking from `position` towards `look_at`.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// Two cameras are equal when they make the same rays: an orthographic
+/// camera's field of view (and its axis) and lens are not compared.
+#[derive(Clone, Debug)]
 pub struct Camera {
     /// Eye position (the lens centre).
     pub position: Vec3A,
@@ -58,9 +110,12 @@ pub struct Camera {
     pub right: Vec3A,
     /// Unit up vector (image −y).
     pub up: Vec3A,
-    /// Field of view in degrees, across [`fov_axis`](Self::fov_axis).
+    /// Perspective or orthographic.
+    pub projection: Projection,
+    /// Field of view in degrees, across [`fov_axis`](Self::fov_axis)
+    /// (perspective only).
     pub fov_deg: f32,
-    /// The image extent the field of view spans.
+    /// The image extent the field of view spans (perspective only).
     pub fov_axis: FovAxis,
     /// Lens radius (0: a pinhole, everything sharp).
     pub aperture_radius: f32,
@@ -71,6 +126,24 @@ pub struct Camera {
     /// Pixel reconstruction filter: where in and around its pixel each
     /// camera sample lands.
     pub filter: PixelFilter,
+}
+
+impl PartialEq for Camera {
+    fn eq(&self, o: &Self) -> bool {
+        let perspective = !self.is_orthographic();
+        self.position == o.position
+            && self.forward == o.forward
+            && self.right == o.right
+            && self.up == o.up
+            && self.projection == o.projection
+            && (!perspective
+                || (self.fov_deg == o.fov_deg
+                    && self.fov_axis == o.fov_axis
+                    && self.aperture_radius == o.aperture_radius
+                    && self.focus_distance == o.focus_distance))
+            && self.near_clip == o.near_clip
+            && self.filter == o.filter
+    }
 }
 
 impl Camera {
@@ -89,6 +162,7 @@ impl Camera {
             forward,
             right,
             up,
+            projection: Projection::Perspective,
             fov_deg: vfov_deg,
             fov_axis: FovAxis::Y,
             aperture_radius: 0.0,
@@ -98,22 +172,34 @@ impl Camera {
         })
     }
 
-    /// `tan(vertical fov / 2)` for an image of aspect ratio `width / height`.
+    /// `tan(vertical fov / 2)` for an image of aspect ratio `width / height`
+    /// (the perspective field of view, whatever the projection).
     #[inline]
     pub fn tan_half_vertical(&self, aspect: f32) -> f32 {
-        let t = (self.fov_deg.to_radians() * 0.5).tan();
-        let horizontal = match self.fov_axis {
-            FovAxis::Y => return t,
-            FovAxis::X => true,
-            FovAxis::Diagonal => return t / (aspect * aspect + 1.0).sqrt(),
-            FovAxis::Smaller => aspect < 1.0,
-            FovAxis::Larger => aspect >= 1.0,
+        vertical_half(self.fov_axis, (self.fov_deg.to_radians() * 0.5).tan(), aspect)
+    }
+
+    /// True for parallel rays (an orthographic projection).
+    #[inline]
+    pub fn is_orthographic(&self) -> bool {
+        matches!(self.projection, Projection::Orthographic { .. })
+    }
+
+    /// Half width and half height of the image on the plane one unit in
+    /// front of the eye (perspective: the tangents of the half angles) or
+    /// of the orthographic rectangle (world units), for an image of aspect
+    /// ratio `width / height`.
+    #[inline]
+    pub fn half_extents(&self, aspect: f32) -> (f32, f32) {
+        let v = match self.projection {
+            Projection::Perspective => self.tan_half_vertical(aspect),
+            // The rectangle fits: the larger of the two heights it implies.
+            Projection::Orthographic {
+                half_width,
+                half_height,
+            } => half_height.max(half_width / aspect),
         };
-        if horizontal {
-            t / aspect
-        } else {
-            t
-        }
+        (v * aspect, v)
     }
 
     /// The vertical field of view in degrees for an image of aspect ratio
@@ -122,16 +208,25 @@ impl Camera {
         2.0 * self.tan_half_vertical(aspect).atan().to_degrees()
     }
 
-    /// True when [`ray_through_lens`](Self::ray_through_lens) needs a lens sample.
+    /// True when [`ray_through_lens`](Self::ray_through_lens) needs a lens
+    /// sample (an orthographic camera has no lens).
     #[inline]
     pub fn has_lens(&self) -> bool {
-        self.aperture_radius > 0.0
+        self.aperture_radius > 0.0 && !self.is_orthographic()
     }
 
-    /// Pinhole ray through film position `(x, y)` in pixels (origin
-    /// top-left, y down) of a `width × height` image.
+    /// Pinhole (or orthographic) ray through film position `(x, y)` in
+    /// pixels (origin top-left, y down) of a `width × height` image.
     #[inline]
     pub fn ray(&self, x: f32, y: f32, width: u32, height: u32) -> Ray {
+        if let Projection::Orthographic { .. } = self.projection {
+            // Parallel projection (pbrt-v4 §5.1.4, Mitsuba's `orthographic`):
+            // the film point on the rectangle through the eye, looking down
+            // the view axis.
+            let (sx, sy) = self.film_offsets(x, y, width, height);
+            let origin = self.position + self.right * sx + self.up * sy;
+            return self.clipped(Ray::new(origin, self.forward));
+        }
         let dir = self.direction(x, y, width, height);
         self.clipped(Ray::new(self.position, dir))
     }
@@ -152,12 +247,20 @@ impl Camera {
         self.clipped(Ray::new(origin, (focus - origin).normalize()))
     }
 
+    /// Offsets of film position `(x, y)` along `right` and `up` on the
+    /// image plane (see [`half_extents`](Self::half_extents)).
+    #[inline]
+    fn film_offsets(&self, x: f32, y: f32, width: u32, height: u32) -> (f32, f32) {
+        let (hx, hy) = self.half_extents(width as f32 / height as f32);
+        (
+            (2.0 * x / width as f32 - 1.0) * hx,
+            (1.0 - 2.0 * y / height as f32) * hy,
+        )
+    }
+
     #[inline]
     fn direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3A {
-        let aspect = width as f32 / height as f32;
-        let tan_half = self.tan_half_vertical(aspect);
-        let sx = (2.0 * x / width as f32 - 1.0) * tan_half * aspect;
-        let sy = (1.0 - 2.0 * y / height as f32) * tan_half;
+        let (sx, sy) = self.film_offsets(x, y, width, height);
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 
@@ -236,6 +339,48 @@ mod tests {
         // A pinhole ignores the lens sample.
         c.aperture_radius = 0.0;
         assert_eq!(c.ray_through_lens(30.0, 70.0, 100, 100, Vec2::new(0.9, 0.1)), pin);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_span_the_scale() {
+        let mut c = Camera::new(Vec3A::new(1.0, 2.0, 3.0), Vec3A::new(1.0, 2.0, 0.0), Vec3A::Y, 60.0).unwrap();
+        c.projection = Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 0.0,
+        };
+        let (w, h) = (200, 100);
+        for (x, y) in [(0.0, 0.0), (100.0, 50.0), (200.0, 100.0), (37.0, 81.0)] {
+            let r = c.ray(x, y, w, h);
+            assert_eq!(r.dir, -Vec3A::Z);
+            // On the plane through the eye, at the film point scaled to the extents.
+            assert_eq!(r.origin.z, 3.0);
+            let ex = 1.0 + (x / 100.0 - 1.0) * 2.0;
+            let ey = 2.0 + (1.0 - y / 50.0) * 1.0;
+            assert!(
+                (r.origin.x - ex).abs() < 1e-5 && (r.origin.y - ey).abs() < 1e-5,
+                "{}",
+                r.origin
+            );
+        }
+        assert_eq!(c.half_extents(2.0), (2.0, 1.0));
+        // Both extents: the image's aspect ratio extends the binding one's partner.
+        c.projection = Projection::Orthographic {
+            half_width: 2.0,
+            half_height: 2.0,
+        };
+        assert_eq!(c.half_extents(2.0), (4.0, 2.0));
+        assert_eq!(c.half_extents(0.5), (2.0, 4.0));
+        c.projection = Projection::Orthographic {
+            half_width: 0.0,
+            half_height: 1.5,
+        };
+        assert_eq!(c.half_extents(0.5), (0.75, 1.5));
+        // The near clip moves the start along the view axis; a lens is ignored.
+        c.near_clip = 0.5;
+        c.aperture_radius = 0.3;
+        assert!(!c.has_lens());
+        let r = c.ray_through_lens(100.0, 50.0, w, h, Vec2::new(0.9, 0.1));
+        assert_eq!(r.origin, Vec3A::new(1.0, 2.0, 2.5));
     }
 
     #[test]

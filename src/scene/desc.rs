@@ -361,6 +361,12 @@ pub struct CameraDesc {
     pub fov: Option<Spanned<f64>>,
     /// `"x"`, `"y"`, `"diagonal"`, `"smaller"` or `"larger"`.
     pub fov_axis: Option<Spanned<String>>,
+    /// `"perspective"` (the default) or `"orthographic"`.
+    pub projection: Option<Spanned<String>>,
+    /// Orthographic: the smallest half width shown (world units).
+    pub half_width: Option<Spanned<f64>>,
+    /// Orthographic: the smallest half height shown (world units).
+    pub half_height: Option<Spanned<f64>>,
     /// Thin-lens radius (0: a pinhole).
     pub aperture_radius: Option<Spanned<f64>>,
     /// Distance of the plane in focus along the view axis.
@@ -611,6 +617,10 @@ pub struct LightDesc {
     pub cutoff_angle: Option<Spanned<f64>>,
     /// Spot: half-angle of full intensity, degrees.
     pub beam_width: Option<Spanned<f64>>,
+    /// Spot: the ramp between `beam_width` and `cutoff_angle`, `"mitsuba"`
+    /// (linear in the angle, the default) or `"gltf"` (squared, linear in
+    /// the cosine).
+    pub falloff: Option<Spanned<String>>,
 }
 
 /// `[[objects]]`: the keys of every object type (the loader checks which

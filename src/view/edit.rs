@@ -9,7 +9,7 @@ use super::orbit::Orbit;
 use crate::film::output::write_atomically;
 use crate::film::OutputError;
 use crate::math::Vec3A;
-use crate::scene::{self, IntegratorKind, Light, Material, Scene, SceneError, ShadingModel};
+use crate::scene::{self, IntegratorKind, Light, Material, Projection, Scene, SceneError, ShadingModel};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
@@ -47,6 +47,10 @@ pub struct EditableScene {
     /// The TOML document of the file; `None` when the scene was read from
     /// another format.
     doc: Option<DocumentMut>,
+    /// The file's orthographic half width and half height, which the orbit
+    /// scales together (its zoom), so that the rectangle still fits the
+    /// viewer's image whatever its aspect ratio.
+    orthographic: Option<(f32, f32)>,
 }
 
 /// Why the viewer could not save.
@@ -80,6 +84,10 @@ fn vec3_of(item: Option<&Item>) -> Option<Vec3A> {
 fn number_of(item: Option<&Item>) -> Option<f32> {
     item?.as_value().and_then(number).map(|x| x as f32)
 }
+
+/// Half the vertical field of view of the frustum an orthographic camera's
+/// orbit starts with, when the file names no point looked at.
+const ORTHOGRAPHIC_ORBIT_HALF_FOV_DEG: f32 = 20.0;
 
 /// The shortest decimal that reads back as `x` through the scene loader
 /// (which parses an f64 and rounds it to f32).
@@ -146,13 +154,29 @@ impl EditableScene {
 
     fn from_parts(path: &Path, scene: Scene, doc: Option<DocumentMut>) -> Self {
         let cam = &scene.camera;
+        let scene_projection = cam.projection;
         let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
-        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward);
+        let s = &scene.settings;
+        let aspect = s.width as f32 / s.height as f32;
+        // An orthographic camera orbits a target placed where a 40° frustum
+        // spans its image height, unless the file names the point looked at.
+        let half_height = cam.half_extents(aspect).1;
+        let ahead = if cam.is_orthographic() {
+            half_height / ORTHOGRAPHIC_ORBIT_HALF_FOV_DEG.to_radians().tan()
+        } else {
+            1.0
+        };
+        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward * ahead);
         let up =
             vec3_of(camera_table.and_then(|c| c.get("up"))).unwrap_or(if doc.is_some() { Vec3A::Y } else { cam.up });
-        // The orbit keeps a vertical field of view: the file's, whatever axis it spans.
-        let s = &scene.settings;
-        let vfov = cam.vertical_fov_deg(s.width as f32 / s.height as f32);
+        // The orbit keeps a vertical field of view: the file's, whatever axis
+        // it spans; for an orthographic camera, the one whose frustum spans
+        // the image height at the target (zooming then scales the image).
+        let vfov = if cam.is_orthographic() {
+            2.0 * (half_height / (target - cam.position).length()).atan().to_degrees()
+        } else {
+            cam.vertical_fov_deg(aspect)
+        };
         let orbit = Orbit::looking_at(cam.position, target, up, vfov)
             .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, vfov))
             .expect("a valid camera has a view direction");
@@ -191,9 +215,25 @@ impl EditableScene {
             scene,
             orbit,
             initial_orbit: orbit,
+            orthographic: match scene_projection {
+                Projection::Orthographic {
+                    half_width,
+                    half_height,
+                } => Some((half_width, half_height)),
+                Projection::Perspective => None,
+            },
             lights,
             doc,
         }
+    }
+
+    /// The file's orthographic half extents scaled by the orbit's zoom
+    /// against the file's; `None` for a perspective camera.
+    fn orthographic_halves(&self) -> Option<(f32, f32)> {
+        let (w, h) = self.orthographic?;
+        let k = self.orbit.orthographic_half_height() / self.initial_orbit.orthographic_half_height();
+        let k = if k.is_finite() && k > 0.0 { k } else { 1.0 };
+        Some((w * k, h * k))
     }
 
     /// Copies the camera and the light edits into [`Self::scene`]; call after
@@ -208,7 +248,15 @@ impl EditableScene {
             } else {
                 cam.focus_distance
             };
+            let projection = match self.orthographic_halves() {
+                Some((half_width, half_height)) => Projection::Orthographic {
+                    half_width,
+                    half_height,
+                },
+                None => Projection::Perspective,
+            };
             self.scene.camera = crate::scene::Camera {
+                projection,
                 aperture_radius: old.aperture_radius,
                 focus_distance,
                 near_clip: old.near_clip,
@@ -268,8 +316,19 @@ impl EditableScene {
         set(cam, "position", toml_vec3(self.orbit.eye()));
         set(cam, "look_at", toml_vec3(self.orbit.target));
         set(cam, "up", toml_vec3(self.orbit.up));
-        set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
-        // `vfov` now says the field of view: a `fov` on another axis would contradict it.
+        if let Some((w, h)) = self.orthographic_halves() {
+            for (key, x) in [("half_width", w), ("half_height", h)] {
+                if x > 0.0 {
+                    set(cam, key, value(toml_number(x)));
+                } else {
+                    cam.remove(key);
+                }
+            }
+            cam.remove("vfov");
+        } else {
+            set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
+        }
+        // `vfov` (or `half_height`) now says the extent: an axis would contradict it.
         cam.remove("fov");
         cam.remove("fov_axis");
     }

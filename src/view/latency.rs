@@ -1,5 +1,6 @@
 //! The viewer's interaction latency, measured without a window
-//! (`caustic view SCENE --latency-bench N`): after a warm-up render, N camera
+//! (`caustic view SCENE --latency-bench N`): the time to open the scene and
+//! to its first image; after a warm-up render, N camera
 //! moves and N diffuse-material edits, each timed from the change to its
 //! first image (the preview pass) and to its first full-resolution pass;
 //! plus the time of each of the first full-resolution passes (frames per
@@ -62,6 +63,12 @@ pub struct LatencyReport {
     pub height: u32,
     /// Changes of each kind measured.
     pub repeats: usize,
+    /// Time to read the scene file (and its meshes and textures) into the
+    /// editable scene, before the first render request.
+    pub load_ms: f64,
+    /// Time from the first request to the first image of any kind (the
+    /// preview pass; accelerator build included).
+    pub first_image_ms: f64,
     /// Time from the first request to the first full-resolution image
     /// (accelerator build and photon pass included).
     pub startup_ms: f64,
@@ -81,7 +88,9 @@ pub struct LatencyReport {
 
 /// Measures the viewer's latency on `path` at `size` with `accel`.
 pub fn measure(path: &Path, size: (u32, u32), accel: AccelKind, repeats: usize) -> Result<LatencyReport, SceneError> {
+    let opening = Instant::now();
     let edit = EditableScene::open(path)?;
+    let load_ms = opening.elapsed().as_secs_f64() * 1e3;
     let mut core = ViewerCore::new(edit, size, accel, || {});
     let timeout = Duration::from_secs(600);
     let t0 = Instant::now();
@@ -90,9 +99,11 @@ pub fn measure(path: &Path, size: (u32, u32), accel: AccelKind, repeats: usize) 
     // The warm-up: record the first full passes (1, 2, 4, 8, 16 spp).
     let mut seen_pass = 0;
     let mut startup_ms = None;
+    let mut first_image_ms = None;
     while passes.len() < 5 && t0.elapsed() < timeout {
         core.wait(timeout);
         if let Some(f) = &core.frame {
+            first_image_ms.get_or_insert(t0.elapsed().as_secs_f64() * 1e3);
             if !f.preview && f.pass != seen_pass {
                 seen_pass = f.pass;
                 startup_ms.get_or_insert(t0.elapsed().as_secs_f64() * 1e3);
@@ -160,6 +171,8 @@ pub fn measure(path: &Path, size: (u32, u32), accel: AccelKind, repeats: usize) 
         width: size.0,
         height: size.1,
         repeats,
+        load_ms,
+        first_image_ms: first_image_ms.unwrap_or(f64::NAN),
         startup_ms: startup_ms.unwrap_or(f64::NAN),
         camera_first_image: Millis::of(cam_first),
         camera_first_full: Millis::of(cam_full),

@@ -64,6 +64,12 @@ impl Orbit {
         Camera::new(self.eye(), self.target, self.up, self.vfov_deg)
     }
 
+    /// Half height of an orthographic camera on this orbit: that of the
+    /// frustum at the target, so that zooming scales the image.
+    pub fn orthographic_half_height(&self) -> f32 {
+        self.distance * (self.vfov_deg.to_radians() * 0.5).tan()
+    }
+
     /// Turns the eye around the target by a drag of `(dx, dy)` pixels in a
     /// view `height` pixels tall (a full-height drag turns by 180°).
     pub fn rotate(&mut self, dx: f32, dy: f32, height: f32) {

@@ -92,9 +92,16 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         }
     }
     let c = &scene.camera;
+    let kind = match c.projection {
+        caustic::scene::Projection::Orthographic {
+            half_width,
+            half_height,
+        } => format!("orthographic (at least {half_width} × {half_height} half extents)"),
+        caustic::scene::Projection::Perspective if c.has_lens() => "thin lens".into(),
+        caustic::scene::Projection::Perspective => "pinhole".into(),
+    };
     println!(
-        "camera      {}, pixel filter {} (radius {} px)",
-        if c.has_lens() { "thin lens" } else { "pinhole" },
+        "camera      {kind}, pixel filter {} (radius {} px)",
         c.filter.name(),
         c.filter.radius()
     );

@@ -32,7 +32,15 @@ pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
 
 fn print_latency(r: &latency::LatencyReport) {
     eprintln!("{} at {}×{} with {}", r.scene, r.width, r.height, r.accel);
-    eprintln!("  first image after start: {:.0} ms", r.startup_ms);
+    eprintln!("  scene read: {:.0} ms", r.load_ms);
+    eprintln!(
+        "  first image (preview) after the first request: {:.0} ms",
+        r.first_image_ms
+    );
+    eprintln!(
+        "  first full-resolution image after the first request: {:.0} ms",
+        r.startup_ms
+    );
     let row = |what: &str, m: &latency::Millis| {
         eprintln!(
             "  {what:<32} median {:7.1} ms  (min {:.1}, max {:.1})",

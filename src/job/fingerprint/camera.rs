@@ -2,7 +2,7 @@
 
 use super::encoder::{Encoder, Fingerprint};
 use crate::film::filter::PixelFilter;
-use crate::scene::{Camera, FovAxis};
+use crate::scene::{Camera, FovAxis, Projection};
 
 impl Fingerprint for Camera {
     fn encode(&self, e: &mut Encoder) {
@@ -17,6 +17,7 @@ impl Fingerprint for Camera {
             focus_distance,
             near_clip,
             filter,
+            projection,
         } = self;
         e.tag("camera");
         e.put(position);
@@ -36,6 +37,15 @@ impl Fingerprint for Camera {
         e.option(lens.as_ref(), |e, l| e.floats(l));
         e.f32(*near_clip);
         e.put(filter);
+        // Appended only when not the perspective every earlier camera had.
+        if let Projection::Orthographic {
+            half_width,
+            half_height,
+        } = projection
+        {
+            e.tag("orthographic");
+            e.floats(&[*half_width, *half_height]);
+        }
     }
 }
 

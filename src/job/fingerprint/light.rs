@@ -1,7 +1,7 @@
 //! Lights' encoding; an environment image by its texels' content.
 
 use super::encoder::{Encoder, Fingerprint};
-use crate::scene::light::{EnvironmentMap, SpotLight};
+use crate::scene::light::{EnvironmentMap, SpotFalloff, SpotLight};
 use crate::scene::{AreaLight, Light};
 
 impl Fingerprint for Light {
@@ -21,12 +21,17 @@ impl Fingerprint for Light {
                     intensity,
                     cutoff,
                     beam_width,
+                    falloff,
                 } = s;
                 e.put(position);
                 e.put(axis);
                 e.put(intensity);
                 e.f32(*cutoff);
                 e.f32(*beam_width);
+                // Mitsuba's falloff, the first, adds nothing.
+                if *falloff == SpotFalloff::Gltf {
+                    e.tag("gltf falloff");
+                }
             }
             Light::Directional { direction, irradiance } => {
                 e.u8(2);

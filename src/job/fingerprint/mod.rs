@@ -182,6 +182,7 @@ pub fn differences_between(then: &CheckpointMeta, then_label: &str, now: &Checkp
 mod tests {
     use super::*;
     use crate::math::{Vec3, Vec3A};
+    use crate::scene::light::{SpotFalloff, SpotLight};
     use crate::scene::{Light, Material, Object, Shape};
     use std::sync::Arc;
 
@@ -267,6 +268,17 @@ mod tests {
                 },
             ],
             media: Default::default(),
+        }
+    }
+
+    fn spot(falloff: SpotFalloff) -> SpotLight {
+        SpotLight {
+            position: Vec3A::new(0.0, 2.0, 0.0),
+            axis: Vec3A::NEG_Y,
+            intensity: Vec3A::ONE,
+            cutoff: 0.5,
+            beam_width: 0.3,
+            falloff,
         }
     }
 
@@ -388,6 +400,12 @@ mod tests {
                 s.camera.focus_distance += 1.0;
             }),
             ("near clip", |s| s.camera.near_clip = 0.5),
+            ("orthographic", |s| {
+                s.camera.projection = crate::scene::Projection::Orthographic {
+                    half_width: 2.0,
+                    half_height: 0.0,
+                }
+            }),
             ("tent filter", |s| {
                 s.camera.filter = crate::film::filter::PixelFilter::Tent { radius: 1.0 }
             }),
@@ -526,6 +544,8 @@ mod tests {
                 })
             }),
             ("light order", |s| s.lights.swap(0, 1)),
+            ("spot", |s| s.lights.push(Light::Spot(spot(SpotFalloff::Mitsuba)))),
+            ("gltf spot", |s| s.lights.push(Light::Spot(spot(SpotFalloff::Gltf)))),
             ("sphere radius", |s| {
                 if let Shape::Sphere(b) = &mut s.objects[1].shape {
                     b.radius = 0.6;

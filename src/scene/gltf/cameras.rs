@@ -1,12 +1,12 @@
-//! Cameras (glTF 2.0 §3.10): the perspective camera a node places (it
-//! looks down its node's −z axis, +y up), chosen by `--camera` or the first
+//! Cameras (glTF 2.0 §3.10): the perspective or orthographic camera a node
+//! places (it looks down its node's −z axis, +y up), chosen by `--camera` or the first
 //! in the scene, or a camera that frames the model when the file has none.
 
 use super::nodes::Graph;
 use super::Ctx;
 use crate::math::Vec3A;
 use crate::scene::load::SceneError;
-use crate::scene::{Camera, RenderSettings, Scene};
+use crate::scene::{Camera, Projection, RenderSettings, Scene};
 use glam::Vec3;
 
 /// Image height of a model's render, and its width when the camera gives
@@ -106,43 +106,71 @@ pub(super) fn choose(
         return Ok(true);
     };
     let pointer = format!("/cameras/{}", placed.item);
-    let perspective = match cameras[placed.item].projection() {
-        gltf::camera::Projection::Perspective(p) => p,
-        gltf::camera::Projection::Orthographic(_) => {
-            return Err(ctx.error(
-                &pointer,
-                "an orthographic camera: caustic renders perspective cameras only (choose another with --camera)",
-            ))
-        }
-    };
-    let yfov = perspective.yfov().to_degrees();
-    if !(yfov > 0.0 && yfov < 180.0) {
-        return Err(ctx.error(
-            format!("{pointer}/perspective/yfov"),
-            format!("{yfov}°: must be in (0°, 180°)"),
-        ));
-    }
-    if let Some(aspect) = perspective.aspect_ratio() {
-        if !(aspect > 0.0 && aspect.is_finite()) {
-            return Err(ctx.error(
-                format!("{pointer}/perspective/aspectRatio"),
-                format!("{aspect}: must be > 0"),
-            ));
-        }
-        settings.height = DEFAULT_HEIGHT;
-        settings.width = ((DEFAULT_HEIGHT as f32 * aspect).round() as u32).clamp(1, crate::limits::MAX_IMAGE_SIDE);
-    }
     let w = placed.world;
     let position = Vec3A::from(w.transform_point3(Vec3::ZERO));
     let forward = Vec3A::from(w.transform_vector3(Vec3::NEG_Z));
     let up = Vec3A::from(w.transform_vector3(Vec3::Y));
-    let mut c = Camera::new(position, position + forward, up, yfov).ok_or_else(|| {
+    let mut c = Camera::new(position, position + forward, up, DEFAULT_FRAMING_FOV_DEG).ok_or_else(|| {
         ctx.error(
             format!("/nodes/{}", placed.node),
             "the node's transform collapses the camera's axes",
         )
     })?;
-    let znear = perspective.znear();
+    let (aspect, znear) = match cameras[placed.item].projection() {
+        gltf::camera::Projection::Perspective(perspective) => {
+            let yfov = perspective.yfov().to_degrees();
+            if !(yfov > 0.0 && yfov < 180.0) {
+                return Err(ctx.error(
+                    format!("{pointer}/perspective/yfov"),
+                    format!("{yfov}°: must be in (0°, 180°)"),
+                ));
+            }
+            c.fov_deg = yfov;
+            let aspect = perspective.aspect_ratio();
+            if let Some(aspect) = aspect {
+                if !(aspect > 0.0 && aspect.is_finite()) {
+                    return Err(ctx.error(
+                        format!("{pointer}/perspective/aspectRatio"),
+                        format!("{aspect}: must be > 0"),
+                    ));
+                }
+            }
+            (aspect, perspective.znear())
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            // §3.10.3: xmag and ymag are the half width and half height of
+            // the view (the projection matrix's 1/xmag, 1/ymag); zero would
+            // collapse it and a negative one mirror it.
+            let (xmag, ymag) = (o.xmag(), o.ymag());
+            for (key, v) in [("xmag", xmag), ("ymag", ymag)] {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(ctx.error(
+                        format!("{pointer}/orthographic/{key}"),
+                        format!("{v}: must be a finite number > 0"),
+                    ));
+                }
+            }
+            let aspect = xmag / ymag;
+            if !(aspect > 0.0 && aspect.is_finite()) {
+                return Err(ctx.error(
+                    format!("{pointer}/orthographic"),
+                    format!("xmag / ymag = {xmag} / {ymag} is not a usable aspect ratio"),
+                ));
+            }
+            // The image shows at least the xmag × ymag rectangle: at the
+            // default size exactly, and with another aspect ratio
+            // (`--width`/`--height`) extended, never stretched nor cropped.
+            c.projection = Projection::Orthographic {
+                half_width: xmag,
+                half_height: ymag,
+            };
+            (Some(aspect), o.znear())
+        }
+    };
+    if let Some(aspect) = aspect {
+        settings.height = DEFAULT_HEIGHT;
+        settings.width = ((DEFAULT_HEIGHT as f32 * aspect).round() as u32).clamp(1, crate::limits::MAX_IMAGE_SIDE);
+    }
     if znear.is_finite() && znear > 0.0 {
         c.near_clip = znear;
     }

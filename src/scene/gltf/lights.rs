@@ -5,7 +5,7 @@
 use super::nodes::Graph;
 use super::Ctx;
 use crate::math::Vec3A;
-use crate::scene::light::SpotLight;
+use crate::scene::light::{SpotFalloff, SpotLight};
 use crate::scene::load::SceneError;
 use crate::scene::Light;
 use glam::Vec3;
@@ -86,6 +86,7 @@ pub(super) fn lights(ctx: &Ctx, graph: &Graph) -> Result<Vec<Light>, SceneError>
                     intensity: scaled,
                     cutoff: outer_cone_angle,
                     beam_width: inner_cone_angle,
+                    falloff: SpotFalloff::Gltf,
                 })
             }
         });

@@ -13,7 +13,7 @@ mod spot;
 pub use emitter::{bounding_sphere, EmissionOrigin, Emitter, LightSample};
 pub use environment::EnvironmentMap;
 pub use shape::ShapeEmitter;
-pub use spot::SpotLight;
+pub use spot::{SpotFalloff, SpotLight};
 
 use crate::math::{Vec2, Vec3A};
 use std::sync::Arc;

@@ -5,7 +5,7 @@ use super::ctx::Ctx;
 use super::error::SceneError;
 use crate::math::{Transform, Vec3, Vec3A};
 use crate::scene::desc::{LightDesc, LightKind};
-use crate::scene::light::{EnvironmentMap, SpotLight};
+use crate::scene::light::{EnvironmentMap, SpotFalloff, SpotLight};
 use crate::scene::{AreaLight, Light};
 use crate::texture::ColourSpace;
 use std::sync::Arc;
@@ -30,6 +30,7 @@ impl Ctx<'_> {
             ("direction", l.direction.as_ref().map(|s| s.span())),
             ("cutoff_angle", l.cutoff_angle.as_ref().map(|s| s.span())),
             ("beam_width", l.beam_width.as_ref().map(|s| s.span())),
+            ("falloff", l.falloff.as_ref().map(|s| s.span())),
         ];
         let colour = match &l.colour {
             None => Vec3A::ONE,
@@ -98,6 +99,7 @@ impl Ctx<'_> {
                         "direction",
                         "cutoff_angle",
                         "beam_width",
+                        "falloff",
                         "colour",
                         "intensity",
                     ],
@@ -140,12 +142,22 @@ impl Ctx<'_> {
                         x
                     }
                 };
+                let falloff = match &l.falloff {
+                    None => SpotFalloff::Mitsuba,
+                    Some(f) => SpotFalloff::from_name(f.get_ref()).ok_or_else(|| {
+                        self.invalid(
+                            f.span(),
+                            format!("unknown `falloff` `{}`: expected mitsuba or gltf", f.get_ref()),
+                        )
+                    })?,
+                };
                 Ok(Light::Spot(SpotLight {
                     position,
                     axis,
                     intensity: power,
                     cutoff: cutoff.to_radians(),
                     beam_width: beam_width.to_radians(),
+                    falloff,
                 }))
             }
             LightKind::Directional => {

@@ -9,7 +9,7 @@ use crate::film::{OutputSettings, ToneMap};
 use crate::geometry::TriangleTest;
 use crate::limits::{check_image_limits, check_photon_count, ImageLimit, MAX_IMAGE_SIDE};
 use crate::math::{SamplerKind, Vec3A};
-use crate::scene::camera::FovAxis;
+use crate::scene::camera::{FovAxis, Projection};
 use crate::scene::desc::{
     AdaptiveGoalName, CameraDesc, CausticsName, DenoiseQualityName, GatherName, IntegratorName, PhotonsDesc,
     RenderDesc, SamplerName, SharingName, Spanned, ToneMapName, TriangleTestName,
@@ -307,8 +307,72 @@ impl Ctx<'_> {
         if let Some(n) = non_negative(&c.near_clip, "near_clip")? {
             camera.near_clip = n;
         }
+        camera.projection = self.projection(c)?;
         camera.filter = self.pixel_filter(c)?;
         Ok(camera)
+    }
+
+    /// `projection` and, for an orthographic camera, its `half_width`
+    /// and `half_height`.
+    fn projection(&self, c: &CameraDesc) -> Result<Projection, SceneError> {
+        let name = c.projection.as_ref().map_or("perspective", |p| p.get_ref().as_str());
+        let halves = [("half_width", &c.half_width), ("half_height", &c.half_height)];
+        match name {
+            "perspective" => match halves.iter().find_map(|(k, v)| v.as_ref().map(|v| (k, v))) {
+                Some((key, v)) => Err(self.invalid(
+                    v.span(),
+                    format!(
+                        "`{key}` is an orthographic camera's: give `projection = \"orthographic\"` \
+                         (a perspective camera has `vfov` or `fov`)"
+                    ),
+                )),
+                None => Ok(Projection::Perspective),
+            },
+            "orthographic" => {
+                let at = c.projection.as_ref().expect("named").span();
+                let mut half = [0.0f32; 2];
+                for (h, (key, v)) in half.iter_mut().zip(halves) {
+                    if let Some(v) = v {
+                        *h = self.number(v, key)?;
+                        if *h <= 0.0 {
+                            return Err(self.invalid(v.span(), format!("`{key}` = {h} must be > 0")));
+                        }
+                    }
+                }
+                if half == [0.0, 0.0] {
+                    return Err(self.invalid(
+                        at,
+                        "an orthographic camera needs `half_width` or `half_height` (or both: the image shows \
+                         at least that rectangle)",
+                    ));
+                }
+                for (key, v) in [("vfov", &c.vfov), ("fov", &c.fov)] {
+                    if let Some(v) = v {
+                        return Err(self.invalid(
+                            v.span(),
+                            format!(
+                                "`{key}` is a perspective camera's: an orthographic camera's extent is \
+                                 `half_width` or `half_height`"
+                            ),
+                        ));
+                    }
+                }
+                if let Some(r) = c.aperture_radius.as_ref().filter(|r| *r.get_ref() != 0.0) {
+                    return Err(self.invalid(
+                        r.span(),
+                        "an orthographic camera has no lens: `aperture_radius` must be 0 or absent",
+                    ));
+                }
+                Ok(Projection::Orthographic {
+                    half_width: half[0],
+                    half_height: half[1],
+                })
+            }
+            other => Err(self.invalid(
+                c.projection.as_ref().expect("named").span(),
+                format!("unknown `projection` `{other}`: expected perspective or orthographic"),
+            )),
+        }
     }
 
     /// The camera's `filter`, `filter_radius` and `filter_stddev`.

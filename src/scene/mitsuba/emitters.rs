@@ -5,7 +5,7 @@ use super::props::Plugin;
 use super::spectrum::SpectrumUse;
 use super::Builder;
 use crate::math::{Vec3, Vec3A};
-use crate::scene::light::{EnvironmentMap, SpotLight};
+use crate::scene::light::{EnvironmentMap, SpotFalloff, SpotLight};
 use crate::scene::load::SceneError;
 use crate::scene::Light;
 use crate::texture::ColourSpace;
@@ -53,6 +53,7 @@ impl Builder<'_> {
                     intensity,
                     cutoff: cutoff.to_radians(),
                     beam_width: beam.to_radians(),
+                    falloff: SpotFalloff::Mitsuba,
                 })
             }
             "directional" => {

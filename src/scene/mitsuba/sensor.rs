@@ -1,4 +1,4 @@
-//! `<sensor>` (perspective, thinlens) with its `<film>` (hdrfilm and its
+//! `<sensor>` (perspective, thinlens, orthographic) with its `<film>` (hdrfilm and its
 //! `<rfilter>`) and `<sampler>`, and `<integrator>` (path, direct, and the
 //! wrappers that only add outputs).
 
@@ -6,7 +6,7 @@ use super::props::Plugin;
 use crate::film::filter::PixelFilter;
 use crate::math::Vec3A;
 use crate::scene::load::SceneError;
-use crate::scene::{Camera, FovAxis, IntegratorKind, RenderSettings};
+use crate::scene::{Camera, FovAxis, IntegratorKind, Projection, RenderSettings};
 use glam::Mat4;
 
 /// The film diagonal Mitsuba converts a `focal_length` with (35 mm film, mm).
@@ -31,12 +31,14 @@ pub struct SensorSettings {
 
 /// Reads a `<sensor>`.
 pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
-    let thin_lens = match p.kind {
-        "perspective" => false,
-        "thinlens" => true,
+    let (thin_lens, orthographic) = match p.kind {
+        "perspective" => (false, false),
+        "thinlens" => (true, false),
+        "orthographic" => (false, true),
         other => {
             return Err(p.error(format!(
-                "the sensor `{other}` is not supported: caustic renders `perspective` and `thinlens` cameras"
+                "the sensor `{other}` is not supported: caustic renders `perspective`, `thinlens` and \
+                 `orthographic` cameras"
             )))
         }
     };
@@ -49,7 +51,11 @@ pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
         Some(s) => sampler(&s)?,
         None => (4, 0),
     };
-    let (fov_deg, fov_axis) = match p.float("fov")? {
+    // An orthographic sensor has no field of view: it leaves `fov` and
+    // `focal_length` unread, so that `finish` reports them.
+    let fov = if orthographic { None } else { p.float("fov")? };
+    let (fov_deg, fov_axis) = match fov {
+        _ if orthographic => (45.0, FovAxis::X),
         Some(fov) => {
             if p.has("focal_length") {
                 return Err(p.error("give `fov` or `focal_length`, not both"));
@@ -84,6 +90,9 @@ pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
         }
     };
     for offset in ["principal_point_offset_x", "principal_point_offset_y"] {
+        if orthographic {
+            break;
+        }
         if p.float(offset)?.is_some_and(|v| v != 0.0) {
             return Err(p.error(format!("`{offset}` (an off-centre lens) is not supported")));
         }
@@ -104,11 +113,25 @@ pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
         )
     } else {
         // A pinhole reads `focus_distance` only for interactive tools.
-        p.float("focus_distance")?;
+        if !orthographic {
+            p.float("focus_distance")?;
+        }
         (0.0, 1.0)
     };
     let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
-    let camera = camera_from(&to_world, p)?;
+    let (mut camera, scale) = camera_from(&to_world, p, orthographic)?;
+    let mut near_clip = near_clip;
+    if orthographic {
+        // Mitsuba's `orthographic`: the film spans [−1, 1] across x (and
+        // 1/aspect across y) in camera space, scaled by `to_world`; rays
+        // start on the near plane, z = near_clip in camera space, which
+        // `to_world`'s z scale stretches.
+        camera.projection = Projection::Orthographic {
+            half_width: scale.x,
+            half_height: 0.0,
+        };
+        near_clip *= scale.z;
+    }
     p.finish()?;
     Ok(SensorSettings {
         camera: Camera {
@@ -127,9 +150,11 @@ pub fn sensor(p: &Plugin) -> Result<SensorSettings, SceneError> {
     })
 }
 
-/// The camera frame of a sensor's `to_world`: Mitsuba's camera looks down
-/// +z with +y up and +x to the image's left.
-fn camera_from(m: &Mat4, p: &Plugin) -> Result<Camera, SceneError> {
+/// The camera frame of a sensor's `to_world` and its scale along each
+/// axis: Mitsuba's camera looks down +z with +y up and +x to the image's
+/// left. An orthographic camera's x and y scales are its extent and its z
+/// scale only moves the near plane: those need only equal x and y scales.
+fn camera_from(m: &Mat4, p: &Plugin, orthographic: bool) -> Result<(Camera, glam::Vec3), SceneError> {
     if m.row(3) != glam::Vec4::W {
         return Err(p.error("`to_world` is a projective matrix; a camera needs an affine one"));
     }
@@ -138,8 +163,8 @@ fn camera_from(m: &Mat4, p: &Plugin) -> Result<Camera, SceneError> {
     let (lx, ly, lz) = (x.length(), y.length(), z.length());
     let orthogonal =
         x.dot(y).abs() <= 1e-4 * lx * ly && y.dot(z).abs() <= 1e-4 * ly * lz && x.dot(z).abs() <= 1e-4 * lx * lz;
-    let uniform = (lx - ly).abs() <= 1e-4 * lx && (lx - lz).abs() <= 1e-4 * lx;
-    if !(orthogonal && uniform && lx > 0.0) {
+    let uniform = (lx - ly).abs() <= 1e-4 * lx && (orthographic || (lx - lz).abs() <= 1e-4 * lx);
+    if !(orthogonal && uniform && lx > 0.0 && lz > 0.0) {
         return Err(p.error(
             "`to_world` shears or scales the camera unevenly, which would distort the image; caustic takes rotations, translations and uniform scales",
         ));
@@ -149,13 +174,16 @@ fn camera_from(m: &Mat4, p: &Plugin) -> Result<Camera, SceneError> {
     let up = Vec3A::from(y / ly);
     let right = -Vec3A::from(x / lx);
     let base = Camera::new(Vec3A::ZERO, Vec3A::Z, Vec3A::Y, 45.0).expect("a valid frame");
-    Ok(Camera {
-        position,
-        forward,
-        right,
-        up,
-        ..base
-    })
+    Ok((
+        Camera {
+            position,
+            forward,
+            right,
+            up,
+            ..base
+        },
+        glam::Vec3::new(lx, ly, lz),
+    ))
 }
 
 /// `(width, height, filter)` of an `<film type="hdrfilm">`.

@@ -2,6 +2,7 @@
 //! loader's `colour × intensity` with `intensity = 1` is exact).
 
 use super::{degrees_for, int, num, path_from, string, unsupported, vec3, WriteError};
+use crate::scene::light::SpotFalloff;
 use crate::scene::Light;
 use std::path::Path;
 use toml::{Table, Value};
@@ -29,6 +30,9 @@ pub(super) fn light(i: usize, l: &Light, dir: &Path) -> Result<Table, WriteError
             };
             t.insert("cutoff_angle".into(), angle(s.cutoff, "cutoff_angle")?);
             t.insert("beam_width".into(), angle(s.beam_width, "beam_width")?);
+            if s.falloff != SpotFalloff::Mitsuba {
+                t.insert("falloff".into(), string(s.falloff.name()));
+            }
         }
         Light::Directional { direction, irradiance } => {
             t.insert("direction".into(), vec3(exact_direction(*direction, &part)?));

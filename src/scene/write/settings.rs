@@ -8,8 +8,8 @@ use crate::film::ToneMap;
 use crate::geometry::TriangleTest;
 use crate::math::SamplerKind;
 use crate::scene::{
-    AdaptiveGoal, Camera, CausticsMode, GatherMode, IntegratorKind, Media, PassThrough, PhotonSettings, RenderSettings,
-    SampleSharing, Scene,
+    AdaptiveGoal, Camera, CausticsMode, GatherMode, IntegratorKind, Media, PassThrough, PhotonSettings, Projection,
+    RenderSettings, SampleSharing, Scene,
 };
 use toml::{Table, Value};
 
@@ -126,9 +126,24 @@ pub(super) fn camera(c: &Camera, scene: &Scene) -> Result<Table, WriteError> {
     t.insert("forward".into(), vec3(c.forward));
     t.insert("right".into(), vec3(c.right));
     t.insert("up".into(), vec3(c.up));
-    t.insert("fov".into(), num(c.fov_deg));
-    t.insert("fov_axis".into(), string(c.fov_axis.name()));
-    t.insert("aperture_radius".into(), num(c.aperture_radius));
+    match c.projection {
+        Projection::Perspective => {
+            t.insert("fov".into(), num(c.fov_deg));
+            t.insert("fov_axis".into(), string(c.fov_axis.name()));
+            t.insert("aperture_radius".into(), num(c.aperture_radius));
+        }
+        Projection::Orthographic {
+            half_width,
+            half_height,
+        } => {
+            t.insert("projection".into(), string(c.projection.name()));
+            for (key, h) in [("half_width", half_width), ("half_height", half_height)] {
+                if h > 0.0 {
+                    t.insert(key.into(), num(h));
+                }
+            }
+        }
+    }
     t.insert("focus_distance".into(), num(c.focus_distance));
     t.insert("near_clip".into(), num(c.near_clip));
     match &c.filter {
