@@ -314,3 +314,55 @@ fn light_keys_are_read_and_checked() {
     let Light::Spot(spot) = s.lights[0] else { panic!() };
     assert!((spot.cutoff.to_degrees() - 20.0).abs() < 1e-4 && (spot.beam_width.to_degrees() - 15.0).abs() < 1e-4);
 }
+
+/// A panel whose normal faces away from the floor: one-sided it leaves the
+/// floor dark; emitting both sides (`emit_both_sides`, glTF's and Cycles'
+/// emission) it lights the floor as the rectangle does, with twice the
+/// rectangle's power, and half its photons leave each side.
+#[test]
+fn a_panel_emitting_both_sides_lights_what_is_behind_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let up = QUAD.replace("normal = [0.0, -1.0, 0.0]", "normal = [0.0, 1.0, 0.0]");
+    let both = format!(
+        "[materials.both]\ndiffuse = 0.0\nemission = [3.0, 3.0, 3.0]\nemit_both_sides = true\n{}",
+        up.replace("material = \"lamp\"", "material = \"both\"")
+    );
+    for integrator in ["path", "whitted"] {
+        let rect = mean(&film(&panel_scene(dir.path(), integrator, RECT)));
+        let one_sided = mean(&film(&panel_scene(dir.path(), integrator, &up)));
+        assert!(
+            one_sided.max_element() < 0.05 * rect.min_element(),
+            "{integrator}: {one_sided}"
+        );
+        let scene = panel_scene(dir.path(), integrator, &both);
+        let emitter = Emitter::of_object(&scene, 1).expect("the panel emits");
+        assert!((emitter.power() - Vec3A::splat(6.0 * PI)).length() < 1e-3);
+        let m = mean(&film(&scene));
+        assert!(
+            (m / rect - Vec3A::ONE).abs().max_element() < 0.02,
+            "{integrator}: {m} against the rectangle's {rect}"
+        );
+    }
+    // Photons: the panel's power, half of them downward.
+    let scene = panel_scene(dir.path(), "path", &both);
+    let emitter = Emitter::of_object(&scene, 1).unwrap();
+    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let everything = Caster {
+        center: Vec3A::ZERO,
+        radius: 100.0,
+    };
+    let n = 40_000;
+    let tracer = PhotonTracer::with_casters(&scene, accel.as_ref(), n, vec![everything]);
+    let (mut total, mut down) = (Vec3A::ZERO, 0);
+    for i in 0..n {
+        if let Some(p) = tracer.emit(i) {
+            total += p.power();
+            down += usize::from(p.ray().dir.y < 0.0);
+        }
+    }
+    assert!(
+        (total / emitter.power() - Vec3A::ONE).abs().max_element() < 0.01,
+        "{total}"
+    );
+    assert!((down as f64 / n as f64 - 0.5).abs() < 0.01, "{down} of {n} downward");
+}

@@ -281,9 +281,9 @@ impl<'a> PathTracer<'a> {
             let si = self.scene.surface_interaction(&ray, &hit);
             let material = &*self.scene.materials[si.material as usize].at(si.uv);
             if let Some(light) = self.lights.object_emitter(si.object) {
-                // An emitting surface, seen from the side its normal faces.
+                // An emitting surface, seen from a side it emits from.
                 let in_map = since_map.is_some_and(|n| n >= 1 && n <= self.caustic_depth);
-                if ray.dir.dot(si.ng) < 0.0 && !in_map && !hidden {
+                if material.emits_toward(ray.dir, si.ng) && !in_map && !hidden {
                     let w = if specular {
                         1.0
                     } else {

@@ -269,7 +269,7 @@ impl<'a> VolumePathTracer<'a> {
             let si = self.scene.surface_interaction(&ray, &hit);
             let material = &*self.scene.materials[si.material as usize].at(si.uv);
             if let Some(light) = self.lights.object_emitter(si.object) {
-                if ray.dir.dot(si.ng) < 0.0 && !hidden {
+                if material.emits_toward(ray.dir, si.ng) && !hidden {
                     let w = if specular {
                         1.0
                     } else {

@@ -255,9 +255,9 @@ impl<'a> Whitted<'a> {
     fn shade(&self, ray: &Ray, hit: &crate::accel::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = self.scene.surface_interaction(ray, hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
-        // An emitting surface seen from the side its normal faces.
+        // An emitting surface seen from a side it emits from.
         let hidden = depth == 0 && self.scene.settings.hide_emitters;
-        let emitted = if ray.dir.dot(si.ng) < 0.0 && !hidden {
+        let emitted = if m.emits_toward(ray.dir, si.ng) && !hidden {
             m.emission
         } else {
             Vec3A::ZERO

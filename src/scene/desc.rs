@@ -429,6 +429,8 @@ pub struct MaterialDesc {
     pub emission_strength: Option<Spanned<f64>>,
     /// Scatter only on the front side (the side the normal faces).
     pub one_sided: Option<Spanned<bool>>,
+    /// `emission` leaves both sides of the surface (else the front only).
+    pub emit_both_sides: Option<Spanned<bool>>,
     /// Microfacet distribution of the rough lobes: "ggx" or "beckmann".
     pub microfacet: Option<Spanned<String>>,
     /// Scatters nothing: rays pass straight through (a medium's boundary).

@@ -347,6 +347,10 @@ pub struct Material {
     /// makes each object using it an area light that also reflects by the
     /// rest of the material, as Mitsuba's `area` emitter on a shape.
     pub emission: Vec3A,
+    /// [`emission`](Self::emission) leaves both sides of the surface, as
+    /// Cycles' emission shader and glTF's double-sided materials do (Mitsuba's
+    /// `area` emitter and caustic's TOML emit from the front only).
+    pub emits_both_sides: bool,
     /// Scatters only on the front, the side the shading normal faces, and
     /// is black from behind (Mitsuba's BSDFs without `twosided`); else an
     /// opaque surface reflects the same on both sides. Dielectrics always
@@ -613,6 +617,7 @@ impl Material {
             principled: None,
             disney: None,
             emission: Vec3A::ZERO,
+            emits_both_sides: false,
             one_sided: false,
             microfacet: MicrofacetDistribution::Ggx,
             roughness_v: None,
@@ -732,6 +737,16 @@ impl Material {
         }
     }
 
+    /// True when a ray of direction `dir` meeting a surface of geometric
+    /// normal `ng` with this material sees its emission: from the front,
+    /// or from either side when the material
+    /// [emits both sides](Self::emits_both_sides).
+    #[inline]
+    pub fn emits_toward(&self, dir: Vec3A, ng: Vec3A) -> bool {
+        let cos = dir.dot(ng);
+        cos < 0.0 || (self.emits_both_sides && cos > 0.0)
+    }
+
     /// The material's values at texture coordinates `uv`: itself when no
     /// value is textured, else an unnamed, untextured copy with every
     /// textured parameter looked up (what the BSDF and the Whitted
@@ -794,6 +809,7 @@ impl Material {
                 ..d
             }),
             emission: self.emission_at(uv),
+            emits_both_sides: self.emits_both_sides,
             one_sided: self.one_sided,
             microfacet: self.microfacet,
             roughness_v: self.roughness_v.map(|r| scalar(&t.roughness_v, r).max(0.0)),

@@ -25,6 +25,7 @@ impl Fingerprint for Material {
             principled,
             disney,
             emission,
+            emits_both_sides,
             one_sided,
             microfacet,
             roughness_v,
@@ -57,6 +58,10 @@ impl Fingerprint for Material {
         e.bool(*null);
         e.option(textures.as_deref(), |e, t| e.put(t));
         e.option(blend.as_deref(), |e, b| e.put(b));
+        // Appended only when set: one-sided emitters keep their encoding.
+        if *emits_both_sides {
+            e.tag("emits both sides");
+        }
     }
 }
 

@@ -200,6 +200,9 @@ pub(super) fn material(ctx: &mut Ctx, m: &gltf::Material) -> Result<Built, Scene
     // glTF's doubleSided only tells rasterisers whether to cull back faces;
     // caustic, like Cycles, shades both sides of every surface.
     out.one_sided = false;
+    // Emission too leaves both sides, as from Cycles' emission shader and a
+    // rasteriser's double-sided material.
+    out.emits_both_sides = true;
     let alpha_mask = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => None,
         gltf::material::AlphaMode::Mask => Some(AlphaMask {

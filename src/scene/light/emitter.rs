@@ -168,7 +168,8 @@ impl Emitter {
                     Some(t) => t.max_value() * material.emission,
                     None => material.emission,
                 };
-                peak * (PI * shape.area)
+                let sides = if material.emits_both_sides { 2.0 } else { 1.0 };
+                peak * (PI * shape.area * sides)
             }
         }
     }
@@ -237,8 +238,9 @@ impl Emitter {
                 let (q, pdf) = shape.sample_from(p, u, emission_uses_uv(material))?;
                 let to = q.p - p;
                 let wi = to.normalize_or_zero();
-                // One-sided: only the side the normal faces emits.
-                if wi.dot(q.n) >= 0.0 || wi == Vec3A::ZERO {
+                // Only the side the normal faces emits, unless both do.
+                let cos = wi.dot(q.n);
+                if wi == Vec3A::ZERO || cos == 0.0 || (cos > 0.0 && !material.emits_both_sides) {
                     return None;
                 }
                 let li = material.emission_at(q.uv);
@@ -363,11 +365,22 @@ impl Emitter {
             }),
             Emitter::Environment { .. } => None,
             Emitter::Shape { shape, material } => {
+                // Both sides: the first half of `u.x` picks the front, the
+                // second the back, each at twice the density.
+                let (u, normal_sign, sides) = match material.emits_both_sides {
+                    false => (u, 1.0, 1.0),
+                    true if u.x < 0.5 => (Vec2::new(2.0 * u.x, u.y), 1.0, 2.0),
+                    true => (
+                        Vec2::new((2.0 * u.x - 1.0).min(1.0 - f32::EPSILON / 2.0), u.y),
+                        -1.0,
+                        2.0,
+                    ),
+                };
                 let q = shape.sample_point(u, emission_uses_uv(material));
                 Some(EmissionOrigin {
                     x: q.p,
-                    normal: Some(q.n),
-                    scale: material.emission_at(q.uv) * shape.area,
+                    normal: Some(q.n * normal_sign),
+                    scale: material.emission_at(q.uv) * (shape.area * sides),
                     direction: None,
                 })
             }

@@ -488,6 +488,7 @@ impl Ctx<'_> {
             coating,
             emission,
             one_sided: m.one_sided.as_ref().is_some_and(|s| *s.get_ref()),
+            emits_both_sides: m.emit_both_sides.as_ref().is_some_and(|s| *s.get_ref()),
             microfacet,
             roughness_v,
             null: m.null.as_ref().is_some_and(|n| *n.get_ref()),

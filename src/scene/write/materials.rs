@@ -187,6 +187,9 @@ fn material(m: &Material, dir: &Path) -> Result<Table, WriteError> {
         t.insert("alpha_cutoff".into(), num(a.cutoff));
     }
     t.insert("one_sided".into(), Value::Boolean(m.one_sided));
+    if m.emits_both_sides {
+        t.insert("emit_both_sides".into(), Value::Boolean(true));
+    }
     t.insert("microfacet".into(), string(m.microfacet.name()));
     t.insert("null".into(), Value::Boolean(m.null));
     Ok(t)
