@@ -288,3 +288,28 @@ mod window {
         assert_eq!(*cam, after.camera().unwrap());
     }
 }
+
+/// The viewer opens a glTF model with the camera the command line names
+/// (`caustic view --camera`), as `caustic render` does.
+#[test]
+fn the_viewer_opens_the_camera_the_command_line_names() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/nodes.gltf");
+    let first = EditableScene::open(&path).unwrap();
+    assert_eq!(first.scene.camera.projection, caustic::scene::Projection::Perspective);
+    let options = caustic::scene::LoadOptions {
+        gltf: caustic::scene::gltf::GltfOptions {
+            camera: Some("ortho".parse().unwrap()),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let chosen = EditableScene::open_with(&path, &options).unwrap();
+    assert!(
+        matches!(
+            chosen.scene.camera.projection,
+            caustic::scene::Projection::Orthographic { .. }
+        ),
+        "{:?}",
+        chosen.scene.camera.projection
+    );
+}

@@ -22,6 +22,8 @@ pub const MAX_BOX_DEPTH: u32 = 24;
 pub struct ViewOptions {
     /// Scene file.
     pub scene: PathBuf,
+    /// How it is read (`-D`, a glTF model's `--camera`).
+    pub load: crate::scene::LoadOptions,
     /// Accelerator.
     pub accel: AccelKind,
     /// Image size.
@@ -614,7 +616,7 @@ fn default_paths(scene: &Path) -> (String, String) {
 
 /// Opens the window and runs until it is closed.
 pub fn run(options: ViewOptions) -> Result<(), String> {
-    let mut edit = EditableScene::open(&options.scene).map_err(|e| e.to_string())?;
+    let mut edit = EditableScene::open_with(&options.scene, &options.load).map_err(|e| e.to_string())?;
     if let Some(n) = options.spp {
         edit.scene.settings.spp = n.max(1);
     }

@@ -135,8 +135,14 @@ fn set(table: &mut dyn TableLike, key: &str, item: Item) {
 impl EditableScene {
     /// Loads `path` (validated like `caustic render` does).
     pub fn open(path: &Path) -> Result<Self, SceneError> {
+        Self::open_with(path, &scene::LoadOptions::default())
+    }
+
+    /// [`open`](Self::open) with the command line's options (`-D`, a glTF
+    /// model's camera).
+    pub fn open_with(path: &Path, options: &scene::LoadOptions) -> Result<Self, SceneError> {
         // The loader checks size, encoding and every value first.
-        let scene = scene::load_scene(path)?;
+        let scene = scene::load_scene_options(path, options)?;
         if !scene::is_toml_path(path) {
             return Ok(Self::from_parts(path, scene, None));
         }

@@ -690,6 +690,14 @@ pub struct ViewArgs {
     pub scene: PathBuf,
     #[command(flatten)]
     pub defines: DefineArgs,
+    /// A glTF model's camera to open, by name (the camera's or its node's)
+    /// or index (default: the first the scene places, else one framing the
+    /// model).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub camera: Option<String>,
+    /// Let a glTF model's buffers and images be read from outside its folder.
+    #[arg(long)]
+    pub allow_outside_files: bool,
     #[command(flatten)]
     pub accel: AccelArgs,
     /// Image width (default 960).

@@ -1,12 +1,19 @@
 //! `caustic view`: the window, or its latency benchmark.
 
 use crate::args::ViewArgs;
-use crate::{bad_input, load, Failure};
+use crate::{bad_input, Failure};
 use caustic::view::{latency, DEFAULT_SIZE};
 
 pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
     // A bad scene is refused before any window opens.
-    let mut scene = load(&args.scene, &args.defines)?;
+    let load_options = caustic::scene::LoadOptions {
+        defines: args.defines.defines.clone(),
+        gltf: caustic::scene::gltf::GltfOptions {
+            camera: args.camera.as_deref().map(|c| c.parse().expect("infallible")),
+            allow_outside_files: args.allow_outside_files,
+        },
+    };
+    let mut scene = caustic::scene::load_scene_options(&args.scene, &load_options).map_err(bad_input)?;
     args.accel.apply(&mut scene);
     let size = (
         args.width.unwrap_or(DEFAULT_SIZE.0),
@@ -27,7 +34,7 @@ pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
         }
         return Ok(());
     }
-    open_window(&args, &scene, size, kind)
+    open_window(&args, &scene, size, kind, load_options)
 }
 
 fn print_latency(r: &latency::LatencyReport) {
@@ -69,9 +76,11 @@ fn open_window(
     scene: &caustic::scene::Scene,
     size: (u32, u32),
     accel: caustic::accel::AccelKind,
+    load: caustic::scene::LoadOptions,
 ) -> Result<(), Failure> {
     caustic::view::app::run(caustic::view::app::ViewOptions {
         scene: args.scene.clone(),
+        load,
         accel,
         size,
         accel_options: args.accel.options(scene),
@@ -86,6 +95,7 @@ fn open_window(
     _: &caustic::scene::Scene,
     _: (u32, u32),
     _: caustic::accel::AccelKind,
+    _: caustic::scene::LoadOptions,
 ) -> Result<(), Failure> {
     Err(bad_input(anyhow::anyhow!(
         "this caustic was built without the `viewer` feature (the window); \
