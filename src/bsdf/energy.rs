@@ -206,10 +206,32 @@ pub fn schlick_fresnel_average(f0: Vec3A) -> Vec3A {
 /// single-scattering lobe's own shape (Turquin 2019, as Cycles and Filament
 /// do). With `F = 1` the lobe's albedo `E(μo)` becomes exactly 1.
 pub fn compensation(mf: &Microfacet, mu_o: f32, f_avg: f32) -> f32 {
-    let e = albedo(mf, mu_o).clamp(1.0e-3, 1.0);
-    let e_avg = average_albedo(mf).min(1.0);
-    let f_ms = f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg)).max(1.0e-6);
-    1.0 + f_ms * (1.0 - e) / e
+    Albedos::new(mf, mu_o).compensation(f_avg)
+}
+
+/// `E(μo)` and `E_avg` of one distribution, looked up once for the
+/// [`compensation`] of several Fresnel averages (a metal's three channels).
+#[derive(Clone, Copy, Debug)]
+pub struct Albedos {
+    e: f32,
+    e_avg: f32,
+}
+
+impl Albedos {
+    /// The albedos of `mf` seen from `μo`.
+    pub fn new(mf: &Microfacet, mu_o: f32) -> Self {
+        Self {
+            e: albedo(mf, mu_o).clamp(1.0e-3, 1.0),
+            e_avg: average_albedo(mf).min(1.0),
+        }
+    }
+
+    /// [`compensation`] for the Fresnel average `f_avg`.
+    pub fn compensation(self, f_avg: f32) -> f32 {
+        let (e, e_avg) = (self.e, self.e_avg);
+        let f_ms = f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg)).max(1.0e-6);
+        1.0 + f_ms * (1.0 - e) / e
+    }
 }
 
 #[cfg(test)]

@@ -168,17 +168,26 @@ impl Principled {
     /// The factors that scale the specular reflection seen from `μo`: the
     /// dielectric's `1 + (1 − t)(k_d − 1)` and the metal's `k_m` per channel.
     fn compensation(&self, mu_o: f32) -> (f32, Vec3A) {
-        let k_d = 1.0 + (1.0 - self.transmission) * (self.dielectric_compensation(mu_o) - 1.0);
-        let k_m = match &self.microfacet {
-            Some(mf) if self.metallic > 0.0 => {
+        let Some(mf) = &self.microfacet else {
+            return (1.0, Vec3A::ONE);
+        };
+        // One table lookup serves the dielectric and the metal's channels.
+        let albedos = energy::Albedos::new(mf, mu_o);
+        let k_d = match self.metallic < 1.0 {
+            true => albedos.compensation(energy::dielectric_fresnel_average(self.eta)),
+            false => 1.0,
+        };
+        let k_d = 1.0 + (1.0 - self.transmission) * (k_d - 1.0);
+        let k_m = match self.metallic > 0.0 {
+            true => {
                 let f_avg = energy::schlick_fresnel_average(self.base);
                 Vec3A::new(
-                    energy::compensation(mf, mu_o, f_avg.x),
-                    energy::compensation(mf, mu_o, f_avg.y),
-                    energy::compensation(mf, mu_o, f_avg.z),
+                    albedos.compensation(f_avg.x),
+                    albedos.compensation(f_avg.y),
+                    albedos.compensation(f_avg.z),
                 )
             }
-            _ => Vec3A::ONE,
+            false => Vec3A::ONE,
         };
         (k_d, k_m)
     }

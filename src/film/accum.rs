@@ -138,14 +138,7 @@ impl Accumulation {
     /// The pixels of the rectangle `x0..x1 × y0..y1` as an accumulation of
     /// their own, with this one's buffers.
     pub fn region(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> Accumulation {
-        let mut part = Accumulation::with_buffers(x1 - x0, y1 - y0, self.buffers());
-        let (w, pw) = (self.width as usize, part.width as usize);
-        for (r, y) in (y0..y1).enumerate() {
-            let src = y as usize * w + x0 as usize..y as usize * w + x1 as usize;
-            let dst = r * pw..(r + 1) * pw;
-            part.copy_span(dst, self, src);
-        }
-        part
+        self.region_with(x0, y0, x1, y1, self.buffers())
     }
 
     /// Writes `part` (from [`region`](Self::region)) back at `(x0, y0)`.

@@ -249,10 +249,9 @@ pub struct RenderPlan {
     /// reads them (denoising, an EXR, a checkpoint or a shard's partial,
     /// the viewer). `RenderPlan::new` sets it for a scene that denoises.
     pub aovs: bool,
-    /// Keep the odd-sample half sums that estimate each pixel's noise:
-    /// adaptive sampling reads them, and so do an EXR's error layer,
-    /// checkpoints and partials. `RenderPlan::new` sets it for adaptive
-    /// sampling.
+    /// Keep the odd-sample half sums that estimate each pixel's noise for
+    /// an EXR's error layer, checkpoints and partials (adaptive sampling
+    /// keeps them regardless, see [`buffers`](Self::buffers)).
     pub noise: bool,
 }
 
@@ -437,11 +436,12 @@ impl RenderPlan {
             fog,
             keep_photon_positions: false,
             aovs: s.denoise,
-            noise: s.noise_threshold.is_some(),
+            noise: false,
         }
     }
 
-    /// The optional buffers a render with this plan keeps per pixel.
+    /// The optional buffers a render with this plan keeps per pixel:
+    /// adaptive sampling reads the noise estimate.
     pub fn buffers(&self) -> crate::film::Buffers {
         crate::film::Buffers {
             noise: self.noise || self.adaptive.is_some(),

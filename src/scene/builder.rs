@@ -43,13 +43,6 @@ pub enum Origin {
 }
 
 impl Origin {
-    /// The file the part was read from.
-    pub fn path(&self) -> &Path {
-        match self {
-            Origin::Text { path, .. } | Origin::Json { path, .. } | Origin::File { path } => path,
-        }
-    }
-
     /// An error about the part read here.
     pub fn error(&self, message: impl Into<String>) -> SceneError {
         let message = message.into();
@@ -132,11 +125,6 @@ impl SceneBuilder {
     pub fn add_mesh(&mut self, mesh: Arc<Mesh>) -> u32 {
         self.meshes.push(mesh);
         self.meshes.len() as u32 - 1
-    }
-
-    /// The meshes added so far, by index.
-    pub fn meshes(&self) -> &[Arc<Mesh>] {
-        &self.meshes
     }
 
     /// Adds an object (shape and material) read at `origin`.

@@ -327,14 +327,7 @@ impl ImageTexture {
     /// The channel [`channel`](Self::channel) names, at `uv`.
     #[inline]
     pub fn eval_scalar(&self, uv: Vec2) -> f32 {
-        let t = self.eval(uv);
-        match self.channel {
-            Channel::Luminance => luminance(t.truncate().into()),
-            Channel::R => t.x,
-            Channel::G => t.y,
-            Channel::B => t.z,
-            Channel::A => t.w,
-        }
+        self.scalar_of(self.image.lookup(self.transform.apply(uv), self.wrap, self.filter))
     }
 
     /// The gradient `(∂f/∂u, ∂f/∂v)` of [`eval_scalar`](Self::eval_scalar)

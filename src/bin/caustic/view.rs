@@ -6,13 +6,13 @@ use caustic::view::{latency, DEFAULT_SIZE};
 
 pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
     // A bad scene is refused before any window opens.
-    let load_options = caustic::scene::LoadOptions {
+    let load_options = caustic::job::Overrides {
         defines: args.defines.defines.clone(),
-        gltf: caustic::scene::gltf::GltfOptions {
-            camera: args.camera.as_deref().map(|c| c.parse().expect("infallible")),
-            allow_outside_files: args.allow_outside_files,
-        },
-    };
+        camera: args.camera.clone(),
+        allow_outside_files: args.allow_outside_files,
+        ..Default::default()
+    }
+    .load_options();
     let mut scene = caustic::scene::load_scene_options(&args.scene, &load_options).map_err(bad_input)?;
     args.accel.apply(&mut scene);
     let size = (
