@@ -7,7 +7,7 @@ use caustic::accel::kdtree::KdTreeAccel;
 use caustic::accel::{Accel, AccelOptions};
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Ray, Transform, Vec3, Vec3A};
-use caustic::scene::{Camera, Material, Mesh, Object, RenderSettings, Scene, Shape};
+use caustic::scene::{Camera, Material, Mesh, Object, Scene, Shape};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -56,7 +56,8 @@ fn bumpy_sphere(n: u32) -> Mesh {
 fn scene_of(mesh: Mesh) -> Scene {
     Scene {
         media: Default::default(),
-        settings: RenderSettings::default(),
+        ambient: Vec3A::ZERO,
+        water_medium: None,
         camera: Camera::new(Vec3A::new(0.0, 0.0, 4.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("white", Vec3A::ONE)],
         lights: vec![],

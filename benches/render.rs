@@ -10,22 +10,23 @@ use caustic::accel;
 use caustic::accel::AccelOptions;
 use caustic::analysis::bench::default_accels;
 use caustic::integrator::{render::render, RenderPlan};
-use caustic::scene::{load_scene, Scene};
+use caustic::scene::{load_scene, LoadedScene};
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
 use std::hint::black_box;
 use std::path::Path;
 
-fn small(mut scene: Scene) -> Scene {
-    let s = &mut scene.settings;
+fn small(mut loaded: LoadedScene) -> LoadedScene {
+    let s = &mut loaded.settings;
     s.width = 160;
     s.height = 90;
     s.spp = 1;
     s.photons.count = 10_000;
-    scene
+    loaded
 }
 
-fn render_group(c: &mut Criterion, label: &str, scene: &Scene) {
-    let plan = RenderPlan::new(scene);
+fn render_group(c: &mut Criterion, label: &str, loaded: &LoadedScene) {
+    let scene = &loaded.scene;
+    let plan = RenderPlan::new(scene, &loaded.settings);
     let mut group = c.benchmark_group(format!("render/{label}"));
     group.sampling_mode(SamplingMode::Flat);
     group.throughput(Throughput::Elements((plan.width * plan.height) as u64));
@@ -42,7 +43,11 @@ fn renders(c: &mut Criterion) {
     let cornell = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml"))
         .expect("scenes/cornell.toml loads");
     render_group(c, "cornell-160x90", &small(cornell));
-    render_group(c, "torus-160x90", &small(common::torus_scene()));
+    let torus = LoadedScene {
+        scene: common::torus_scene(),
+        settings: Default::default(),
+    };
+    render_group(c, "torus-160x90", &small(torus));
 }
 
 criterion_group! {

@@ -28,15 +28,15 @@
 //!     lights = [{ type = "point", position = [2, 4, 3], intensity = 20 }]
 //!     objects = [{ type = "sphere", center = [0, 0.5, 0], radius = 0.5, material = "white" }]
 //! "#;
-//! let scene = caustic::scene::parse_scene(text, Path::new("first.toml"))?;
+//! let caustic::scene::LoadedScene { scene, settings } = caustic::scene::parse_scene(text, Path::new("first.toml"))?;
 //! let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default())?;
-//! let plan = RenderPlan::new(&scene);
+//! let plan = RenderPlan::new(&scene, &settings);
 //! let out = integrator::render(&scene, accel.as_ref(), &plan, &|_done, _total| {});
 //! assert!(out.complete);
 //! assert!(out.film.mean().x > 0.0, "the lit sphere shows");
 //!
 //! let dir = tempfile::tempdir()?;
-//! film::write_png(&dir.path().join("first.png"), &out.film, &scene.settings.output)?;
+//! film::write_png(&dir.path().join("first.png"), &out.film, &settings.output)?;
 //! film::write_exr(&dir.path().join("first.exr"), &out.film)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

@@ -7,12 +7,19 @@
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Film;
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{load_scene, Scene};
+use caustic::scene::load_scene;
+use caustic::scene::LoadedScene;
 use std::path::Path;
 
-fn render_with(scene: &Scene, kind: AccelKind) -> Film {
-    let accel = accel::build(scene, kind, &AccelOptions::default()).unwrap();
-    render(scene, accel.as_ref(), &RenderPlan::new(scene), &|_, _| {}).film
+fn render_with(scene: &LoadedScene, kind: AccelKind) -> Film {
+    let accel = accel::build(&scene.scene, kind, &AccelOptions::default()).unwrap();
+    render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film
 }
 
 /// Bounds: mean |Δ| per channel below 1e-3 of the mean radiance, and at

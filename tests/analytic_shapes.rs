@@ -12,11 +12,12 @@ use caustic::math::offset_ray_origin;
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Frame, Ray, Vec2, Vec3A};
 use caustic::scene::light::ShapeEmitter;
-use caustic::scene::{parse_scene, Cylinder, Disk, Scene, Shape, SurfaceInteraction};
+use caustic::scene::LoadedScene;
+use caustic::scene::{parse_scene, Cylinder, Disk, Shape, SurfaceInteraction};
 use std::f32::consts::{FRAC_1_SQRT_2, PI, SQRT_2, TAU};
 use std::path::Path;
 
-fn load(text: &str) -> Scene {
+fn load(text: &str) -> LoadedScene {
     parse_scene(text, Path::new("shapes.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -33,14 +34,14 @@ fn close(a: Vec3A, b: Vec3A, tol: f32) -> bool {
 
 /// The first hit of `ray` (brute force) as shading data; the material is
 /// textured, so the texture coordinates are computed.
-fn shade(scene: &Scene, ray: Ray) -> SurfaceInteraction {
-    let brute = BruteForce::new(scene, TriangleTest::Watertight);
+fn shade(scene: &LoadedScene, ray: Ray) -> SurfaceInteraction {
+    let brute = BruteForce::new(&scene.scene, TriangleTest::Watertight);
     let hit = brute.intersect(&ray, f32::INFINITY).expect("the ray hits");
-    scene.surface_interaction(&ray, &hit)
+    scene.scene.surface_interaction(&ray, &hit)
 }
 
 /// A textured material makes `surface_interaction` compute uv and ∂p/∂uv.
-fn textured(object: &str) -> Scene {
+fn textured(object: &str) -> LoadedScene {
     load(&format!(
         "{HEAD}[materials.t]\ndiffuse = {{ type = \"checkerboard\", colour0 = 0.2, colour1 = 0.8 }}\n{}",
         object.replace("\"m\"", "\"t\"")
@@ -78,7 +79,7 @@ fn disk_uv_and_frame_follow_mitsuba() {
     assert!((si.uv - Vec2::new(0.999, 0.0)).abs().max_element() < 1e-6, "{}", si.uv);
     // Outside the rim: no hit; from behind: the same point (the disk is
     // one surface, its emission and one-sided BSDFs read `ng`).
-    let brute = BruteForce::new(&scene, TriangleTest::Watertight);
+    let brute = BruteForce::new(&scene.scene, TriangleTest::Watertight);
     assert!(brute
         .intersect(&Ray::new(Vec3A::new(0.8, 0.61, 1.0), -Vec3A::Z), f32::INFINITY)
         .is_none());
@@ -109,8 +110,8 @@ fn elliptic_disk_is_sampled_uniformly_with_its_area() {
          [[objects]]\ntype = \"quad\"\ncorner = [-5.0, -5.0, -1.0]\nu = [10.0, 0.0, 0.0]\nv = [0.0, 10.0, 0.0]\nmaterial = \"m\""
     ));
     let mut scene = scene;
-    scene.objects[0].shape = Shape::Disk(d);
-    let e = ShapeEmitter::new(&scene, 0).unwrap();
+    scene.scene.objects[0].shape = Shape::Disk(d);
+    let e = ShapeEmitter::new(&scene.scene, 0).unwrap();
     assert!((e.area - TAU).abs() < 1e-5);
     let mut rng = Rng::new(5, Domain::Photon, 0, 0);
     let n = 40_000;
@@ -144,7 +145,7 @@ fn cylinder_uv_and_normals_follow_mitsuba() {
     assert!(close(si.dpdu, Vec3A::new(-1.88496, 2.51327, 0.0), 1e-5), "{}", si.dpdu);
     assert!(close(si.dpdv, Vec3A::new(0.0, 0.0, 2.0), 1e-6));
     // Open ends: a ray down the axis misses; one through an end meets the inside.
-    let brute = BruteForce::new(&scene, TriangleTest::Watertight);
+    let brute = BruteForce::new(&scene.scene, TriangleTest::Watertight);
     assert!(brute
         .intersect(&Ray::new(Vec3A::new(0.1, 0.0, 5.0), -Vec3A::Z), f32::INFINITY)
         .is_none());
@@ -217,9 +218,9 @@ fn spawned_rays_do_not_hit_their_own_surface() {
         let mut scene = load(&format!(
             "{HEAD}[[objects]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\""
         ));
-        scene.objects[0].shape = shape.clone();
-        let brute = BruteForce::new(&scene, TriangleTest::Watertight);
-        let e = ShapeEmitter::new(&scene, 0).unwrap();
+        scene.scene.objects[0].shape = shape.clone();
+        let brute = BruteForce::new(&scene.scene, TriangleTest::Watertight);
+        let e = ShapeEmitter::new(&scene.scene, 0).unwrap();
         let (mut tested, mut self_hits) = (0, 0);
         for _ in 0..20_000 {
             // A point of the surface, approached from a random direction.
@@ -229,7 +230,7 @@ fn spawned_rays_do_not_hit_their_own_surface() {
             let Some(hit) = brute.intersect(&ray, 1.0) else {
                 continue;
             };
-            let si = scene.surface_interaction(&ray, &hit);
+            let si = scene.scene.surface_interaction(&ray, &hit);
             // Leave on both sides: reflected and transmitted.
             let reflected = caustic::math::sampling::uniform_sphere(Vec2::from(rng.f32x2()));
             for dir in [reflected, -w] {
@@ -282,7 +283,7 @@ fn accelerators_agree_on_disks_and_cylinders() {
          [[objects]]\ntype = \"cylinder\"\np0 = [0.0, -1.0, 0.0]\np1 = [0.0, 0.0, 0.0]\nradius = 1.5\nmaterial = \"holes\"\n";
     let mut scene = parse_scene(text, &dir.path().join("s.toml")).unwrap_or_else(|e| panic!("{e}"));
     // An elliptic, sheared disk facing −(a × b), as Mitsuba's `to_world` may make one.
-    scene.objects.push(caustic::scene::Object {
+    scene.scene.objects.push(caustic::scene::Object {
         name: "ellipse".into(),
         shape: Shape::Disk(
             Disk::new(
@@ -295,19 +296,23 @@ fn accelerators_agree_on_disks_and_cylinders() {
         ),
         material: 0,
     });
-    assert!(caustic::scene::Cutouts::of(&scene).is_some());
-    let brute = BruteForce::new(&scene, TriangleTest::Watertight);
+    assert!(caustic::scene::Cutouts::of(&scene.scene).is_some());
+    let brute = BruteForce::new(&scene.scene, TriangleTest::Watertight);
     let mut kinds = vec![AccelKind::KdTree];
     if cfg!(feature = "embree") {
         kinds.push(AccelKind::Embree);
     }
     for kind in kinds {
-        let a = accel::build(&scene, kind, &AccelOptions::default()).unwrap();
+        let a = accel::build(&scene.scene, kind, &AccelOptions::default()).unwrap();
         let report = crosscheck(
-            &scene,
+            &scene.scene,
             a.as_ref(),
             &brute,
-            &CrosscheckOptions { rays: 40_000, seed: 77 },
+            &CrosscheckOptions {
+                rays: 40_000,
+                seed: 77,
+                image: (scene.settings.width, scene.settings.height),
+            },
         );
         eprintln!("{}\n{report}", kind.name());
         assert!(report.is_ok(), "{}: disagreements\n{report}", kind.name());
@@ -321,7 +326,7 @@ fn accelerators_agree_on_disks_and_cylinders() {
             let (x, y) = (a.intersect(&ray, f32::INFINITY), brute.intersect(&ray, f32::INFINITY));
             if let (Some(x), Some(y)) = (x, y) {
                 if matches!(
-                    scene.objects[x.instance as usize].shape,
+                    scene.scene.objects[x.instance as usize].shape,
                     Shape::Disk(_) | Shape::Cylinder(_)
                 ) {
                     assert_eq!(x, y, "{}: {ray:?}", kind.name());
@@ -342,7 +347,7 @@ fn an_emitting_disk_gives_its_closed_form_irradiance() {
         "{HEAD}[materials.lamp]\ndiffuse = 0.0\nemission = {radiance}\n\
          [[objects]]\ntype = \"disk\"\ncenter = [0.0, {h}, 0.0]\nradius = {r}\nnormal = [0.0, -1.0, 0.0]\nmaterial = \"lamp\""
     ));
-    let e = ShapeEmitter::new(&scene, 0).unwrap();
+    let e = ShapeEmitter::new(&scene.scene, 0).unwrap();
     assert!((e.area - PI * r * r).abs() < 1e-5);
     let mut rng = Rng::new(8, Domain::Photon, 0, 0);
     let n = 100_000;
@@ -375,7 +380,7 @@ fn an_inward_emitting_cylinder_gives_its_closed_form_irradiance() {
          [[objects]]\ntype = \"cylinder\"\np0 = [0.0, 0.0, 0.0]\np1 = [0.0, 0.0, {length}]\nradius = {radius}\n\
          flip_normals = true\nmaterial = \"lamp\""
     ));
-    let e = ShapeEmitter::new(&scene, 0).unwrap();
+    let e = ShapeEmitter::new(&scene.scene, 0).unwrap();
     assert!((e.area - TAU * radius * length).abs() < 1e-5);
     let mut rng = Rng::new(9, Domain::Photon, 0, 0);
     let n = 200_000;
@@ -399,7 +404,7 @@ fn an_inward_emitting_cylinder_gives_its_closed_form_irradiance() {
 
 /// A 4 × 4 floor of albedo 0.5 seen from above, lit by `light` (path
 /// tracing, direct light only, MIS between light and BSDF samples).
-fn floor_scene(light: &str) -> Scene {
+fn floor_scene(light: &str) -> LoadedScene {
     load(&format!(
         "[render]\nwidth = 32\nheight = 32\nspp = 64\nintegrator = \"path\"\nmax_depth = 1\nseed = 5\n\
          [camera]\nposition = [0.0, 3.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\nvfov = 30\n\
@@ -410,9 +415,15 @@ fn floor_scene(light: &str) -> Scene {
     ))
 }
 
-fn film_sum(scene: &Scene) -> (Vec<f32>, f64) {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(scene, accel.as_ref(), &RenderPlan::new(scene), &|_, _| {}).film;
+fn film_sum(scene: &LoadedScene) -> (Vec<f32>, f64) {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let film = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film;
     let red: Vec<f32> = film.pixels.iter().map(|p| p[0]).collect();
     let sum = red.iter().map(|&x| f64::from(x)).sum();
     (red, sum)
@@ -437,7 +448,10 @@ fn the_path_integrator_sees_an_emitting_disk() {
     let mut expected = 0.0f64;
     for y in 0..32 {
         for x in 0..32 {
-            let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
+            let ray = scene
+                .scene
+                .camera
+                .ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
             let p = ray.at(-ray.origin.y / ray.dir.y);
             let rho2 = (p.x - c.x).powi(2) + (p.z - c.z).powi(2);
             let z = h * h + rho2 + r * r;
@@ -482,7 +496,7 @@ fn an_emitting_cylinder_lights_as_its_mesh_does() {
     let cylinder = floor_scene(&format!(
         "[[objects]]\ntype = \"cylinder\"\np0 = [1.4, 1.0, 0.0]\np1 = [2.4, 1.0, 0.0]\nradius = {radius}\nmaterial = \"lamp\""
     ));
-    let e = ShapeEmitter::new(&cylinder, 1).unwrap();
+    let e = ShapeEmitter::new(&cylinder.scene, 1).unwrap();
     assert!((e.area - TAU * radius).abs() < 1e-5);
     let mesh_scene = {
         let s = "[render]\nwidth = 32\nheight = 32\nspp = 64\nintegrator = \"path\"\nmax_depth = 1\nseed = 5\n\
@@ -512,18 +526,18 @@ fn toml_keys_are_read_and_checked() {
         "{HEAD}[[objects]]\ntype = \"disk\"\ncenter = [1.0, 2.0, 3.0]\nradius = 2.0\nrotate = [90.0, 0.0, 0.0]\nmaterial = \"m\"\n\
          [[objects]]\ntype = \"cylinder\"\np0 = [0.0, 1.0, 0.0]\np1 = [0.0, 1.0, 3.0]\nradius = 0.25\nmaterial = \"m\""
     ));
-    let Shape::Disk(d) = &scene.objects[0].shape else {
+    let Shape::Disk(d) = &scene.scene.objects[0].shape else {
         panic!()
     };
     assert!(close(d.center, Vec3A::new(1.0, 2.0, 3.0), 0.0));
     // rotate 90° about x: +z → −y, the disk faces −y; a = 2x, b = 2z.
     assert!(close(d.normal, -Vec3A::Y, 1e-6) && close(d.a, Vec3A::X * 2.0, 1e-6) && close(d.b, Vec3A::Z * 2.0, 1e-6));
-    let Shape::Cylinder(c) = &scene.objects[1].shape else {
+    let Shape::Cylinder(c) = &scene.scene.objects[1].shape else {
         panic!()
     };
     assert_eq!((c.radius, c.length, c.inward), (0.25, 3.0, false));
     assert!(close(c.base, Vec3A::Y, 0.0) && close(c.axis, Vec3A::Z, 0.0));
-    assert_eq!(scene.objects[0].name, "disk#0");
+    assert_eq!(scene.scene.objects[0].name, "disk#0");
     let cases = [
         ("type = \"disk\"\ncenter = [0.0, 0.0, 0.0]\nmaterial = \"m\"", "`radius`"),
         ("type = \"disk\"\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\nmaterial = \"m\"", "must be > 0"),
@@ -561,12 +575,12 @@ fn alpha_masks_cut_disks_and_cylinders() {
          [[objects]]\ntype = \"disk\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"holes\"\n\
          [[objects]]\ntype = \"cylinder\"\np0 = [5.0, 0.0, -1.0]\np1 = [5.0, 0.0, 1.0]\nradius = 1.0\nmaterial = \"holes\""
     ));
-    let material = &scene.materials[scene.objects[0].material as usize];
+    let material = &scene.scene.materials[scene.scene.objects[0].material as usize];
     let mask = material.textures.as_ref().unwrap().alpha.clone().unwrap();
-    let Shape::Disk(disk) = scene.objects[0].shape.clone() else {
+    let Shape::Disk(disk) = scene.scene.objects[0].shape.clone() else {
         panic!()
     };
-    let Shape::Cylinder(tube) = scene.objects[1].shape.clone() else {
+    let Shape::Cylinder(tube) = scene.scene.objects[1].shape.clone() else {
         panic!()
     };
     let mut kinds = vec![AccelKind::Brute, AccelKind::KdTree];
@@ -575,7 +589,7 @@ fn alpha_masks_cut_disks_and_cylinders() {
     }
     let mut rng = Rng::new(4, Domain::Photon, 0, 0);
     for kind in kinds {
-        let a = accel::build(&scene, kind, &AccelOptions::default()).unwrap();
+        let a = accel::build(&scene.scene, kind, &AccelOptions::default()).unwrap();
         let (mut holes, mut solid, mut far) = (0, 0, 0);
         for _ in 0..2_000 {
             // Down onto the disk.

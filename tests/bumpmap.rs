@@ -7,7 +7,8 @@ mod common;
 
 use caustic::geometry::Hit;
 use caustic::math::{Ray, Vec3A};
-use caustic::scene::{parse_scene, Scene};
+use caustic::scene::parse_scene;
+use caustic::scene::LoadedScene;
 use std::path::Path;
 
 /// A 2 × 1 linear image: height 0 on the left texel, 1 on the right.
@@ -18,7 +19,7 @@ fn ramp(dir: &Path) {
 
 /// The quad `[-1, 1]²` at z = 0 facing +z (`∂p/∂u = (2, 0, 0)`,
 /// `∂p/∂v = (0, 2, 0)`), bumped by the ramp.
-fn toml_scene(dir: &Path, texture_extra: &str, channel: &str) -> Scene {
+fn toml_scene(dir: &Path, texture_extra: &str, channel: &str) -> LoadedScene {
     let text = format!(
         r#"[camera]
 position = [0, 0, 5]
@@ -39,7 +40,7 @@ material = "bumpy"
     parse_scene(&text, &dir.join("scene.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn normal_at(scene: &Scene, u: f32, v: f32) -> Vec3A {
+fn normal_at(scene: &LoadedScene, u: f32, v: f32) -> Vec3A {
     let ray = Ray::new(Vec3A::new(0.0, 0.0, 5.0), -Vec3A::Z);
     let hit = Hit {
         t: 5.0,
@@ -48,7 +49,7 @@ fn normal_at(scene: &Scene, u: f32, v: f32) -> Vec3A {
         u,
         v,
     };
-    scene.surface_interaction(&ray, &hit).ns
+    scene.scene.surface_interaction(&ray, &hit).ns
 }
 
 fn close(a: Vec3A, b: Vec3A) -> bool {
@@ -99,7 +100,7 @@ fn mitsuba_bumpmap_reads_as_the_toml_bump_map() {
     let path = common::mitsuba::write(dir.path(), "scene.xml", xml);
     let scene = caustic::scene::mitsuba::load_mitsuba_scene(&path, &[])
         .unwrap_or_else(|e| panic!("{e}"))
-        .scene;
+        .into_loaded();
     // Mitsuba's scalar lookup of a grey image is its luminance.
     let toml = toml_scene(dir.path(), "", "luminance");
     for (u, v) in [(0.5, 0.5), (0.3, 0.7), (0.9, 0.1)] {

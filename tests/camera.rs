@@ -5,10 +5,11 @@
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Film;
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{parse_scene, FovAxis, Projection, Scene, SceneError};
+use caustic::scene::LoadedScene;
+use caustic::scene::{parse_scene, FovAxis, Projection, SceneError};
 use std::path::Path;
 
-fn load(text: &str) -> Result<Scene, SceneError> {
+fn load(text: &str) -> Result<LoadedScene, SceneError> {
     parse_scene(text, Path::new("camera.toml"))
 }
 
@@ -28,8 +29,14 @@ fn scene(camera: &str) -> String {
 
 fn image(text: &str) -> Film {
     let scene = load(text).unwrap();
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film
 }
 
 /// Mean absolute difference between horizontal neighbours: high for a sharp
@@ -51,11 +58,11 @@ fn camera_keys_are_read_and_checked() {
             .replace("vfov = 30\n", ""),
     )
     .unwrap();
-    let c = &s.camera;
+    let c = &s.scene.camera;
     assert_eq!((c.fov_deg, c.fov_axis), (50.0, FovAxis::Diagonal));
     assert_eq!((c.aperture_radius, c.focus_distance, c.near_clip), (0.3, 3.0, 0.25));
     // By default: a pinhole focused on `look_at`, no clipping.
-    let c = load(&scene("")).unwrap().camera;
+    let c = load(&scene("")).unwrap().scene.camera;
     assert_eq!(
         (c.fov_axis, c.aperture_radius, c.focus_distance, c.near_clip),
         (FovAxis::Y, 0.0, 5.0, 0.0)
@@ -127,7 +134,7 @@ fn the_near_clip_hides_what_is_closer() {
 #[test]
 fn pixel_filter_keys_are_read_and_checked() {
     use caustic::film::filter::PixelFilter;
-    let filter = |keys: &str| load(&scene(keys)).unwrap().camera.filter;
+    let filter = |keys: &str| load(&scene(keys)).unwrap().scene.camera.filter;
     assert_eq!(filter(""), PixelFilter::Box { radius: 0.5 });
     assert_eq!(filter("filter = \"tent\""), PixelFilter::Tent { radius: 1.0 });
     assert_eq!(
@@ -189,7 +196,7 @@ fn a_filtered_render_is_the_same_on_any_thread_count() {
 #[test]
 fn orthographic_keys_are_read_and_checked() {
     let ortho = |keys: &str| scene(&format!("projection = \"orthographic\"\n{keys}")).replace("vfov = 30\n", "");
-    let c = load(&ortho("half_width = 2\nhalf_height = 1.5")).unwrap().camera;
+    let c = load(&ortho("half_width = 2\nhalf_height = 1.5")).unwrap().scene.camera;
     assert_eq!(
         c.projection,
         Projection::Orthographic {

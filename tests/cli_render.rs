@@ -66,7 +66,7 @@ fn repo(p: &str) -> PathBuf {
 fn cornell_walls_are_red_and_green_with_every_accelerator() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = repo("scenes/cornell.toml");
-    let cam = load_scene(&scene_path).unwrap().camera;
+    let cam = load_scene(&scene_path).unwrap().scene.camera;
     let (w, h) = (192, 108);
     let mut kinds = vec!["kdtree", "brute"];
     if cfg!(feature = "embree") {
@@ -117,8 +117,8 @@ fn shadowed_floor_is_darker_than_lit_floor() {
     let (w, h) = (scene.settings.width, scene.settings.height);
     let (img, _) = render(&scene_path, &dir.path().join("shadow.png"), &["--accel", "kdtree"]);
     // The ball (centre (0,1,0), radius 0.6) under a light straight above.
-    let (sx, sy) = project(&scene.camera, Vec3A::new(0.0, 0.0, 0.0), w, h);
-    let (lx, ly) = project(&scene.camera, Vec3A::new(2.2, 0.0, 1.5), w, h);
+    let (sx, sy) = project(&scene.scene.camera, Vec3A::new(0.0, 0.0, 0.0), w, h);
+    let (lx, ly) = project(&scene.scene.camera, Vec3A::new(2.2, 0.0, 1.5), w, h);
     let (shadow, lit) = (luminance(mean_rgb(&img, sx, sy)), luminance(mean_rgb(&img, lx, ly)));
     assert!(shadow < 0.5 * lit, "shadow {shadow} vs lit {lit}");
 }

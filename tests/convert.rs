@@ -8,7 +8,7 @@ mod common;
 
 use caustic::scene::compare::first_difference;
 use caustic::scene::write::write_toml_scene;
-use caustic::scene::{load_scene, load_scene_with, Scene};
+use caustic::scene::{load_scene, load_scene_with, LoadedScene};
 use common::same::{assert_same_scene, render_small, Names};
 use std::path::{Path, PathBuf};
 
@@ -18,7 +18,7 @@ fn root() -> PathBuf {
 
 /// Writes `scene` into a fresh folder, reads it back, and checks both the
 /// library's comparison and the tests' own, then a small render of each.
-fn round_trip(what: &str, scene: &Scene) {
+fn round_trip(what: &str, scene: &LoadedScene) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out").join("converted.toml");
     std::fs::create_dir_all(out.parent().unwrap()).unwrap();
@@ -132,6 +132,7 @@ fn the_command_line_converts_with_defines_and_refuses_an_unwritable_output() {
 fn a_part_without_a_toml_spelling_is_refused_and_nothing_is_written() {
     let mut scene = load_scene(&root().join("scenes/lamps.toml")).unwrap();
     let light = scene
+        .scene
         .lights
         .iter_mut()
         .find(|l| matches!(l, caustic::scene::Light::Directional { .. }))
@@ -195,16 +196,16 @@ material = "m"
     let path = dir.path().join("s.toml");
     let parse = |t: &str| caustic::scene::parse_scene(t, &path).map_err(|e| e.to_string());
     let scene = parse(text).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.camera.right, caustic::math::Vec3A::X);
-    assert_eq!(scene.camera.forward, -caustic::math::Vec3A::Z);
-    match &scene.objects[0].shape {
+    assert_eq!(scene.scene.camera.right, caustic::math::Vec3A::X);
+    assert_eq!(scene.scene.camera.forward, -caustic::math::Vec3A::Z);
+    match &scene.scene.objects[0].shape {
         caustic::scene::Shape::Mesh { transform, .. } => {
             let p = transform.point(caustic::math::Vec3A::ONE);
             assert_eq!(p, caustic::math::Vec3A::new(3.0, 5.0, 7.0));
         }
         other => panic!("{other:?}"),
     }
-    match &scene.objects[1].shape {
+    match &scene.scene.objects[1].shape {
         caustic::scene::Shape::Disk(d) => {
             assert_eq!(
                 (d.a, d.b),
@@ -311,6 +312,6 @@ up = [0, 0, -1]
 material = "m"
 "#;
     let scene = caustic::scene::parse_scene(text, Path::new("ortho.toml")).unwrap_or_else(|e| panic!("{e}"));
-    assert!(scene.camera.is_orthographic());
+    assert!(scene.scene.camera.is_orthographic());
     round_trip("orthographic camera, glTF spot", &scene);
 }

@@ -105,14 +105,15 @@ fn every_scene_file_crosschecks() {
     for path in &files {
         let name = path.display().to_string();
         let scene = load_scene(path).unwrap_or_else(|e| panic!("{name} does not load: {e}"));
-        for (a, b, rays) in pairs(&scene, &name) {
+        for (a, b, rays) in pairs(&scene.scene, &name) {
             let report = crosscheck(
-                &scene,
+                &scene.scene,
                 a.as_ref(),
                 b.as_ref(),
                 &CrosscheckOptions {
                     rays,
                     seed: scene.settings.seed,
+                    image: (scene.settings.width, scene.settings.height),
                 },
             );
             assert_clean(&format!("{name}: {} vs {}", report.a_name, report.b_name), &report);
@@ -130,7 +131,16 @@ fn every_scene_file_crosschecks() {
 fn instanced_mesh_scene_crosschecks() {
     let scene = common::scenes::test_scene();
     for (a, b, rays) in pairs(&scene, "instanced test scene") {
-        let report = crosscheck(&scene, a.as_ref(), b.as_ref(), &CrosscheckOptions { rays, seed: 2024 });
+        let report = crosscheck(
+            &scene,
+            a.as_ref(),
+            b.as_ref(),
+            &CrosscheckOptions {
+                rays,
+                seed: 2024,
+                image: (640, 480),
+            },
+        );
         let name = format!("instanced test scene, {} vs {}", report.a_name, report.b_name);
         assert_clean(&name, &report);
         // Rays aimed at vertices and edges must mostly reach geometry, or
@@ -153,15 +163,16 @@ fn dragon_crosschecks_on_a_million_rays() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon.toml");
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let options = AccelOptions::default();
-    let embree = accel::build(&scene, AccelKind::Embree, &options).unwrap();
-    let kdtree = accel::build(&scene, AccelKind::KdTree, &options).unwrap();
+    let embree = accel::build(&scene.scene, AccelKind::Embree, &options).unwrap();
+    let kdtree = accel::build(&scene.scene, AccelKind::KdTree, &options).unwrap();
     let report = crosscheck(
-        &scene,
+        &scene.scene,
         embree.as_ref(),
         kdtree.as_ref(),
         &CrosscheckOptions {
             rays: 1_000_000,
             seed: 1,
+            image: (scene.settings.width, scene.settings.height),
         },
     );
     assert_clean("dragon, embree vs kdtree", &report);

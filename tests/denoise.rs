@@ -9,6 +9,7 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Accumulation;
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec3, Vec3A};
+use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, IntegratorKind, Light, Material, Mirror, RenderSettings, Scene};
 use common::cli::{caustic, stderr};
 #[cfg(feature = "denoise")]
@@ -23,7 +24,7 @@ const TINT: Vec3A = Vec3A::new(0.9, 0.8, 0.7);
 /// A diffuse wall in the plane z = 0 facing the camera (+z), filling the
 /// left of the image; on the right, a perfect mirror at 45° (the plane
 /// x + z = 2) that shows a second diffuse wall, grey, in the plane x = 8.
-fn wall_scene(integrator: IntegratorKind) -> Scene {
+fn wall_scene(integrator: IntegratorKind) -> LoadedScene {
     let mirror = Material {
         mirror: Some(Mirror {
             reflectivity: 1.0,
@@ -31,8 +32,31 @@ fn wall_scene(integrator: IntegratorKind) -> Scene {
         }),
         ..Material::diffuse("mirror", Vec3A::ZERO)
     };
-    Scene {
-        media: Default::default(),
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: Camera::new(Vec3A::new(0.0, 0.0, 5.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
+            materials: vec![
+                Material::diffuse("wall", WALL),
+                mirror,
+                Material::diffuse("grey", Vec3A::splat(0.5)),
+            ],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.0, 0.0, 4.0),
+                intensity: Vec3A::splat(20.0),
+            }],
+            meshes: vec![],
+            objects: vec![
+                // The wall: x in [-10, 0] (the image's left half), facing +z.
+                quad([-10.0, -10.0, 0.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
+                // The mirror, x in [0, 10]: rays going −z reflect toward +x.
+                quad([0.0, -10.0, 2.0], [0.0, 20.0, 0.0], [10.0, 0.0, -10.0], 1),
+                // The wall the mirror shows: the plane x = 8, facing −x.
+                quad([8.0, -10.0, -10.0], [0.0, 0.0, 30.0], [0.0, 20.0, 0.0], 2),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: RenderSettings {
             width: 48,
             height: 32,
@@ -41,38 +65,19 @@ fn wall_scene(integrator: IntegratorKind) -> Scene {
             integrator,
             ..Default::default()
         },
-        camera: Camera::new(Vec3A::new(0.0, 0.0, 5.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
-        materials: vec![
-            Material::diffuse("wall", WALL),
-            mirror,
-            Material::diffuse("grey", Vec3A::splat(0.5)),
-        ],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.0, 0.0, 4.0),
-            intensity: Vec3A::splat(20.0),
-        }],
-        meshes: vec![],
-        objects: vec![
-            // The wall: x in [-10, 0] (the image's left half), facing +z.
-            quad([-10.0, -10.0, 0.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
-            // The mirror, x in [0, 10]: rays going −z reflect toward +x.
-            quad([0.0, -10.0, 2.0], [0.0, 20.0, 0.0], [10.0, 0.0, -10.0], 1),
-            // The wall the mirror shows: the plane x = 8, facing −x.
-            quad([8.0, -10.0, -10.0], [0.0, 0.0, 30.0], [0.0, 20.0, 0.0], 2),
-        ],
     }
 }
 
-fn render_acc(scene: &Scene, threads: usize) -> Accumulation {
+fn render_acc(scene: &LoadedScene, threads: usize) -> Accumulation {
     render_acc_aovs(scene, threads, true)
 }
 
-fn render_acc_aovs(scene: &Scene, threads: usize, aovs: bool) -> Accumulation {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let mut plan = RenderPlan::new(scene);
+fn render_acc_aovs(scene: &LoadedScene, threads: usize, aovs: bool) -> Accumulation {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let mut plan = RenderPlan::new(&scene.scene, &scene.settings);
     plan.aovs = aovs;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| render(scene, accel.as_ref(), &plan, &|_, _| {}).accumulation)
+    pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation)
 }
 
 #[test]
@@ -132,7 +137,7 @@ fn aovs_are_the_same_for_any_thread_count_and_leave_the_image_alone() {
     assert_eq!(without.sum, one.sum, "the colour does not depend on the AOVs");
     assert!(without.albedo.iter().all(|a| *a == Vec3::ZERO), "no AOVs unless asked");
     assert!(
-        !RenderPlan::new(&scene).aovs,
+        !RenderPlan::new(&scene.scene, &scene.settings).aovs,
         "a scene that does not denoise skips them"
     );
 }

@@ -23,7 +23,16 @@ use common::scenes::test_scene;
 fn run(scene: &Scene, options: &AccelOptions, rays: u64, seed: u64) -> CrosscheckReport {
     let embree = EmbreeAccel::build(scene, options).unwrap();
     let brute = BruteForce::new(scene, TriangleTest::Watertight);
-    crosscheck(scene, &embree, &brute, &CrosscheckOptions { rays, seed })
+    crosscheck(
+        scene,
+        &embree,
+        &brute,
+        &CrosscheckOptions {
+            rays,
+            seed,
+            image: (640, 480),
+        },
+    )
 }
 
 fn assert_clean(name: &str, report: &CrosscheckReport) {

@@ -6,7 +6,7 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Mat3A, Vec2, Vec3A};
 use caustic::scene::light::EnvironmentMap;
-use caustic::scene::{parse_scene, Light, Scene};
+use caustic::scene::{parse_scene, Light, LoadedScene};
 use caustic::texture::image::Texels;
 use caustic::texture::Image;
 use std::f32::consts::PI;
@@ -106,7 +106,7 @@ fn the_density_integrates_to_one_and_matches_the_samples() {
 }
 
 fn furnace(environment: Light) -> f32 {
-    let mut scene: Scene = parse_scene(
+    let mut scene: LoadedScene = parse_scene(
         "[render]\nwidth = 24\nheight = 24\nspp = 64\nintegrator = \"path\"\nseed = 5\n\
          [camera]\nposition = [0.0, 0.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 20\n\
          [materials.white]\ndiffuse = 0.8\n\
@@ -114,9 +114,15 @@ fn furnace(environment: Light) -> f32 {
         std::path::Path::new("furnace.toml"),
     )
     .unwrap();
-    scene.lights = vec![environment];
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film;
+    scene.scene.lights = vec![environment];
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let film = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film;
     film.pixels.iter().map(|c| c.x).sum::<f32>() / film.pixels.len() as f32
 }
 
@@ -155,9 +161,9 @@ fn environment_keys_are_read_and_checked() {
     let Light::Environment {
         radiance,
         map: Some(map),
-    } = &s.lights[0]
+    } = &s.scene.lights[0]
     else {
-        panic!("{:?}", s.lights[0])
+        panic!("{:?}", s.scene.lights[0])
     };
     assert_eq!(*radiance, Vec3A::splat(2.0));
     assert!((map.to_world * Vec3A::X - -Vec3A::Z).length() < 1e-5);
@@ -181,9 +187,9 @@ fn environment_keys_are_read_and_checked() {
 /// every direction), for a constant sky and for an image.
 #[test]
 fn environment_photons_carry_the_light_a_sphere_receives() {
-    use caustic::integrator::photon::{PhotonRules, PhotonTracer};
+    use caustic::integrator::photon::{PhotonRules, PhotonTracer, TraceSettings};
     let a = 0.7f32;
-    let mut scene: Scene = parse_scene(
+    let mut scene: LoadedScene = parse_scene(
         "[render]\nintegrator = \"path\"\nseed = 9\n\
          [camera]\nposition = [0.0, 0.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\n\
          [materials.glass]\ndielectric = { ior = 1.5 }\n[materials.floor]\ndiffuse = 0.5\n\
@@ -217,10 +223,16 @@ fn environment_photons_carry_the_light_a_sphere_receives() {
             band_integral,
         ),
     ] {
-        scene.lights = vec![light];
-        let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+        scene.scene.lights = vec![light];
+        let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
         let count = 400_000u64;
-        let tracer = PhotonTracer::with_rules(&scene, accel.as_ref(), count, PhotonRules::Physical);
+        let tracer = PhotonTracer::with_rules(
+            &scene.scene,
+            TraceSettings::of(&scene.settings),
+            accel.as_ref(),
+            count,
+            PhotonRules::Physical,
+        );
         assert!(tracer.has_emitters());
         let mut received = 0.0f64;
         for i in 0..count {

@@ -70,8 +70,8 @@ fn the_first_camera_is_used_with_its_field_of_view_and_aspect() {
     assert!(close(c.forward, -Vec3A::Z) && close(c.up, Vec3A::Y));
     assert!((c.fov_deg - 0.8f32.to_degrees()).abs() < 1e-4);
     assert!((c.near_clip - 0.05).abs() < 1e-7);
-    assert_eq!((g.scene.settings.width, g.scene.settings.height), (900, 600));
-    assert_eq!(g.scene.settings.integrator, caustic::scene::IntegratorKind::Path);
+    assert_eq!((g.settings.width, g.settings.height), (900, 600));
+    assert_eq!(g.settings.integrator, caustic::scene::IntegratorKind::Path);
 }
 
 #[test]
@@ -89,7 +89,8 @@ fn cameras_are_chosen_by_name_node_name_or_index() {
     }
     // The orthographic one: xmag × ymag half extents, its near plane, and an
     // image of aspect xmag / ymag.
-    let s = with("ortho").unwrap_or_else(|e| panic!("{e}")).scene;
+    let g = with("ortho").unwrap_or_else(|e| panic!("{e}"));
+    let s = &g.scene;
     assert_eq!(
         s.camera.projection,
         Projection::Orthographic {
@@ -98,7 +99,7 @@ fn cameras_are_chosen_by_name_node_name_or_index() {
         }
     );
     assert!((s.camera.near_clip - 0.1).abs() < 1e-7);
-    assert_eq!((s.settings.width, s.settings.height), (600, 600));
+    assert_eq!((g.settings.width, g.settings.height), (600, 600));
     let e = with("7").unwrap_err().to_string();
     assert!(e.contains("no such camera") && e.contains("0 `persp`"), "{e}");
 }
@@ -320,7 +321,7 @@ fn an_orthographic_camera_shows_its_rectangle_whatever_the_image_aspect() {
     // rectangle fits: 4 × 4 units shown, the quad in the middle half both ways.
     let model = "tests/data/gltf/ortho_quad.gltf";
     let g = load("ortho_quad.gltf");
-    assert_eq!((g.scene.settings.width, g.scene.settings.height), (1200, 600));
+    assert_eq!((g.settings.width, g.settings.height), (1200, 600));
     for (w, h, x0, x1, y0, y1) in [(40, 20, 10, 30, 0, 20), (20, 20, 5, 15, 5, 15)] {
         let px = render_size(model, w, h);
         for y in 0..h {
@@ -439,7 +440,7 @@ fn convert_writes_a_model_as_toml_that_loads_back_to_the_same_scene() {
         let o = caustic(&["convert", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
         assert!(o.status.success(), "{model}: {}", describe(&o));
         let s = caustic::scene::load_scene(&out).unwrap();
-        assert_eq!(s.objects.len(), load(model).scene.objects.len());
+        assert_eq!(s.scene.objects.len(), load(model).scene.objects.len());
     }
 }
 

@@ -7,7 +7,7 @@ use caustic::accel::kdtree::KdTreeAccel;
 use caustic::accel::{Accel, AccelOptions, Hit, TriangleTest};
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Aabb, Ray, Transform, Vec3, Vec3A};
-use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
+use caustic::scene::{Camera, Material, Mesh, Object, Quad, Scene, Shape, Sphere};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -186,12 +186,13 @@ fn scene_with(mesh: Mesh) -> Scene {
     ];
     Scene {
         media: Default::default(),
-        settings: RenderSettings::default(),
         camera: Camera::new(Vec3A::new(0.0, 0.0, 8.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("white", Vec3A::ONE)],
         lights: vec![],
         meshes: vec![mesh],
         objects,
+        ambient: Vec3A::ZERO,
+        water_medium: None,
     }
 }
 

@@ -45,8 +45,8 @@ fn dragon_throughput_kdtree_vs_embree() {
             let t = Instant::now();
             let cpu = process_cpu_seconds();
             let a: Box<dyn Accel> = match (k, params) {
-                (AccelKind::KdTree, Some(p)) => Box::new(KdTreeAccel::build_with(&scene, &options, &p)),
-                _ => build(&scene, k, &options).unwrap(),
+                (AccelKind::KdTree, Some(p)) => Box::new(KdTreeAccel::build_with(&scene.scene, &options, &p)),
+                _ => build(&scene.scene, k, &options).unwrap(),
             };
             println!(
                 "{}: built in {:.3} s wall, {:.2} s CPU",
@@ -61,7 +61,13 @@ fn dragon_throughput_kdtree_vs_embree() {
         })
         .collect();
     let reference = accels.last().unwrap();
-    let sets = standard_ray_sets(&scene, reference.as_ref(), (w * h) as usize, w as f32 / h as f32, 1);
+    let sets = standard_ray_sets(
+        &scene.scene,
+        reference.as_ref(),
+        (w * h) as usize,
+        w as f32 / h as f32,
+        1,
+    );
     println!("threads: {}", rayon::current_num_threads());
     for set in &sets {
         let mut hits = Vec::new();

@@ -4,15 +4,16 @@
 //! and the scene keys.
 
 use caustic::accel::{self, AccelKind, AccelOptions};
-use caustic::integrator::photon::{Caster, PhotonTracer};
+use caustic::integrator::photon::{Caster, PhotonTracer, TraceSettings};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec2, Vec3A};
 use caustic::scene::light::{Emitter, SpotFalloff};
-use caustic::scene::{parse_scene, Light, Scene};
+use caustic::scene::LoadedScene;
+use caustic::scene::{parse_scene, Light};
 use std::f32::consts::PI;
 use std::path::Path;
 
-fn load(text: &str) -> Scene {
+fn load(text: &str) -> LoadedScene {
     parse_scene(text, Path::new("lights.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -21,9 +22,15 @@ fn load_err(text: &str) -> String {
 }
 
 /// The rendered film's pixels (x, y) → linear RGB.
-fn film(scene: &Scene) -> caustic::film::Film {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    render(scene, accel.as_ref(), &RenderPlan::new(scene), &|_, _| {}).film
+fn film(scene: &LoadedScene) -> caustic::film::Film {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film
 }
 
 fn mean(f: &caustic::film::Film) -> Vec3A {
@@ -44,9 +51,12 @@ fn floor_scene(light: &str, spp: u32) -> String {
 }
 
 /// The floor point pixel `(x, y)`'s centre sees.
-fn floor_point(scene: &Scene, x: u32, y: u32) -> Vec3A {
+fn floor_point(scene: &LoadedScene, x: u32, y: u32) -> Vec3A {
     let s = &scene.settings;
-    let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
+    let ray = scene
+        .scene
+        .camera
+        .ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
     ray.at(-ray.origin.y / ray.dir.y)
 }
 
@@ -62,7 +72,9 @@ fn a_spot_light_falls_off_as_mitsubas_spot_or_gltfs() {
             // on glTF's steeper ramp too.
             64,
         ));
-        let Light::Spot(spot) = scene.lights[0] else { panic!() };
+        let Light::Spot(spot) = scene.scene.lights[0] else {
+            panic!()
+        };
         assert_eq!(spot.falloff, kind);
         assert!((spot.axis - -Vec3A::Y).length() < 1e-6);
         let f = film(&scene);
@@ -155,7 +167,7 @@ fn an_emitting_sphere_lights_the_floor_by_its_solid_angle() {
 
 /// A ceiling panel over a floor: a `[[lights]]` rectangle, an emitting quad
 /// and the same quad as a two-triangle mesh.
-fn panel_scene(dir: &Path, integrator: &str, panel: &str) -> Scene {
+fn panel_scene(dir: &Path, integrator: &str, panel: &str) -> LoadedScene {
     let obj = dir.join("panel.obj");
     std::fs::write(
         &obj,
@@ -187,7 +199,7 @@ fn emitting_quads_and_meshes_light_as_a_rectangle_light_does() {
         let rect = mean(&film(&panel_scene(dir.path(), integrator, RECT)));
         for (what, panel) in [("quad", QUAD), ("mesh", MESH)] {
             let scene = panel_scene(dir.path(), integrator, panel);
-            let emitter = Emitter::of_object(&scene, 1).expect("the panel emits");
+            let emitter = Emitter::of_object(&scene.scene, 1).expect("the panel emits");
             assert!((emitter.power() - Vec3A::splat(3.0 * PI)).length() < 1e-3, "{what}");
             let m = mean(&film(&scene));
             assert!(
@@ -217,7 +229,7 @@ fn a_textured_emission_follows_its_texture() {
          up = [0.0, 0.0, -1.0]\nmaterial = \"floor\"\n{textured}\n"
     );
     let scene = parse_scene(&with_material, &dir.path().join("striped.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let lamp = &scene.materials[scene.objects[1].material as usize];
+    let lamp = &scene.scene.materials[scene.scene.objects[1].material as usize];
     assert!(lamp.emits());
     assert_eq!(lamp.emission_at(Vec2::new(0.1, 0.1)), Vec3A::ZERO);
     assert_eq!(lamp.emission_at(Vec2::new(0.15, 0.1)), Vec3A::splat(6.0));
@@ -251,14 +263,23 @@ fn photons_carry_the_power_of_every_kind_of_light() {
     ];
     for (light, parallel) in cases {
         let scene = load(&floor_scene(light, 1));
-        let emitter = Emitter::all(&scene).into_iter().find(|e| e.power().x > 0.0).unwrap();
-        let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+        let emitter = Emitter::all(&scene.scene)
+            .into_iter()
+            .find(|e| e.power().x > 0.0)
+            .unwrap();
+        let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
         let everything = Caster {
             center: Vec3A::ZERO,
             radius: 100.0,
         };
         let n = 50_000;
-        let tracer = PhotonTracer::with_casters(&scene, accel.as_ref(), n, vec![everything]);
+        let tracer = PhotonTracer::with_casters(
+            &scene.scene,
+            TraceSettings::of(&scene.settings),
+            accel.as_ref(),
+            n,
+            vec![everything],
+        );
         let mut total = Vec3A::ZERO;
         for i in 0..n {
             if let Some(p) = tracer.emit(i) {
@@ -311,7 +332,7 @@ fn light_keys_are_read_and_checked() {
     let s = load(&base(
         "[[lights]]\ntype = \"spot\"\nposition = [0.0, 1.0, 0.0]\ndirection = [0.0, -2.0, 0.0]",
     ));
-    let Light::Spot(spot) = s.lights[0] else { panic!() };
+    let Light::Spot(spot) = s.scene.lights[0] else { panic!() };
     assert!((spot.cutoff.to_degrees() - 20.0).abs() < 1e-4 && (spot.beam_width.to_degrees() - 15.0).abs() < 1e-4);
 }
 
@@ -335,7 +356,7 @@ fn a_panel_emitting_both_sides_lights_what_is_behind_it() {
             "{integrator}: {one_sided}"
         );
         let scene = panel_scene(dir.path(), integrator, &both);
-        let emitter = Emitter::of_object(&scene, 1).expect("the panel emits");
+        let emitter = Emitter::of_object(&scene.scene, 1).expect("the panel emits");
         assert!((emitter.power() - Vec3A::splat(6.0 * PI)).length() < 1e-3);
         let m = mean(&film(&scene));
         assert!(
@@ -345,14 +366,20 @@ fn a_panel_emitting_both_sides_lights_what_is_behind_it() {
     }
     // Photons: the panel's power, half of them downward.
     let scene = panel_scene(dir.path(), "path", &both);
-    let emitter = Emitter::of_object(&scene, 1).unwrap();
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let emitter = Emitter::of_object(&scene.scene, 1).unwrap();
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
     let everything = Caster {
         center: Vec3A::ZERO,
         radius: 100.0,
     };
     let n = 40_000;
-    let tracer = PhotonTracer::with_casters(&scene, accel.as_ref(), n, vec![everything]);
+    let tracer = PhotonTracer::with_casters(
+        &scene.scene,
+        TraceSettings::of(&scene.settings),
+        accel.as_ref(),
+        n,
+        vec![everything],
+    );
     let (mut total, mut down) = (Vec3A::ZERO, 0);
     for i in 0..n {
         if let Some(p) = tracer.emit(i) {

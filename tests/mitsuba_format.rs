@@ -12,6 +12,7 @@ use caustic::math::{Vec3, Vec3A};
 use caustic::scene::mitsuba::load_mitsuba_scene;
 use caustic::scene::mitsuba::transform::parse_transform;
 use caustic::scene::mitsuba::xml::read_document;
+use caustic::scene::LoadedScene;
 use caustic::scene::{load_scene_with, Light, Mesh, Scene, Shape};
 use glam::{Mat4, Vec4};
 use std::path::Path;
@@ -29,9 +30,11 @@ fn scene_text(body: &str) -> String {
     format!("<scene version=\"3.0.0\">\n    <default name=\"w\" value=\"12\"/>\n    {SENSOR}\n{body}\n</scene>\n")
 }
 
-fn load(dir: &Path, body: &str) -> Scene {
+fn load(dir: &Path, body: &str) -> LoadedScene {
     let path = write(dir, "scene.xml", &scene_text(body));
-    load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}")).scene
+    load_mitsuba_scene(&path, &[])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_loaded()
 }
 
 fn load_error(body: &str) -> String {
@@ -44,7 +47,7 @@ const SPHERE: &str = r#"<shape type="sphere"><float name="radius" value="0.5"/><
 fn defaults_are_substituted_and_defines_take_precedence() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "scene.xml", &scene_text(SPHERE));
-    let scene = load_mitsuba_scene(&path, &[]).unwrap().scene;
+    let scene = load_mitsuba_scene(&path, &[]).unwrap().into_loaded();
     assert_eq!(scene.settings.width, 12);
     let defined = load_scene_with(&path, &[("w".into(), "20".into())]).unwrap();
     assert_eq!(defined.settings.width, 20);
@@ -80,8 +83,8 @@ fn includes_splice_their_content_and_resolve_paths_like_mitsuba() {
 </scene>"#,
     );
     let scene = load(dir.path(), r#"<include filename="parts/shapes.xml"/>"#);
-    assert_eq!(scene.objects.len(), 1);
-    assert_eq!(scene.materials[0].diffuse, Vec3A::new(0.8, 0.1, 0.1));
+    assert_eq!(scene.scene.objects.len(), 1);
+    assert_eq!(scene.scene.materials[0].diffuse, Vec3A::new(0.8, 0.1, 0.1));
     // A file including itself is refused, not followed forever.
     let path = write(
         dir.path(),
@@ -108,9 +111,9 @@ fn references_resolve_by_id_and_name() {
         <shape type="sphere"><point name="center" x="4" y="0" z="0"/><ref id="a"/></shape>"#,
     );
     // The shapes that reference `a` share one material.
-    assert_eq!(scene.objects[0].material, scene.objects[2].material);
-    assert_eq!(scene.materials.len(), 2);
-    let b = &scene.materials[scene.objects[1].material as usize];
+    assert_eq!(scene.scene.objects[0].material, scene.scene.objects[2].material);
+    assert_eq!(scene.scene.materials.len(), 2);
+    let b = &scene.scene.materials[scene.scene.objects[1].material as usize];
     assert!(b.textures.as_ref().unwrap().diffuse.is_some());
     let e = load_error(r#"<shape type="sphere"><ref id="nothing"/></shape>"#);
     assert!(e.contains("no object has this id"), "{e}");
@@ -158,7 +161,7 @@ fn principled_reads_its_numbers_textures_and_index() {
         </bsdf></shape>
         <shape type="sphere"><bsdf type="principled"><float name="eta" value="1.33"/></bsdf></shape>"#,
     );
-    let first = &scene.materials[scene.objects[0].material as usize];
+    let first = &scene.scene.materials[scene.scene.objects[0].material as usize];
     let d = first.disney.unwrap();
     assert!(first.one_sided && first.diffuse == Vec3A::new(0.2, 0.4, 0.6));
     // A specular of 0 under refraction becomes 1e-3, as in Mitsuba.
@@ -169,7 +172,9 @@ fn principled_reads_its_numbers_textures_and_index() {
     );
     assert_eq!(d.clearcoat_sampling_rate, 2.0);
     assert!(first.textures.as_ref().unwrap().disney_sheen.is_some());
-    let second = scene.materials[scene.objects[1].material as usize].disney.unwrap();
+    let second = scene.scene.materials[scene.scene.objects[1].material as usize]
+        .disney
+        .unwrap();
     assert_eq!(second.eta, 1.33);
 }
 
@@ -280,7 +285,7 @@ specular_transmission_sampling_rate = 0.5
         }
     };
     for name in ["a", "b"] {
-        let (x, t) = (by_name(&xml, name), by_name(&toml, name));
+        let (x, t) = (by_name(&xml.scene, name), by_name(&toml.scene, name));
         assert_eq!(x.disney, t.disney, "{name}");
         assert_eq!(x.diffuse, t.diffuse, "{name}");
         assert_eq!(x.one_sided, t.one_sided, "{name}");
@@ -314,35 +319,35 @@ fn plugins_build_the_scene_model() {
         <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/></emitter>"#,
     );
     // Camera: Mitsuba's +x is the image's left.
-    let c = &scene.camera;
+    let c = &scene.scene.camera;
     assert!((c.position - Vec3A::new(0.0, 0.0, 5.0)).length() < 1e-6);
     assert!((c.forward - Vec3A::NEG_Z).length() < 1e-6 && (c.right - Vec3A::X).length() < 1e-6);
     assert_eq!((scene.settings.width, scene.settings.height), (12, 8));
-    match &scene.objects[0].shape {
+    match &scene.scene.objects[0].shape {
         Shape::Sphere(s) => {
             assert!((s.center - Vec3A::X).length() < 1e-6 && (s.radius - 2.0).abs() < 1e-6);
         }
         other => panic!("{other:?}"),
     }
-    let plastic = &scene.materials[scene.objects[0].material as usize];
+    let plastic = &scene.scene.materials[scene.scene.objects[0].material as usize];
     assert!(!plastic.one_sided && (plastic.coating.as_ref().unwrap().ior - 1.5 / 1.000277).abs() < 1e-6);
     assert_eq!(plastic.diffuse, Vec3A::splat(0.5));
-    match &scene.objects[1].shape {
+    match &scene.scene.objects[1].shape {
         Shape::Quad(q) => {
             assert!((q.corner - Vec3A::new(-1.0, -1.0, 0.0)).length() < 1e-6);
             assert!((q.normal - Vec3A::Z).length() < 1e-6);
         }
         other => panic!("{other:?}"),
     }
-    let glass = &scene.materials[scene.objects[1].material as usize];
+    let glass = &scene.scene.materials[scene.scene.objects[1].material as usize];
     assert!((glass.dielectric.unwrap().ior - 1.5046 / 1.000277).abs() < 1e-6);
     assert_eq!(glass.emission, Vec3A::splat(2.0));
-    let gold = &scene.materials[scene.objects[2].material as usize];
+    let gold = &scene.scene.materials[scene.scene.objects[2].material as usize];
     assert!(gold.one_sided && gold.conductor.is_some());
-    assert!(matches!(&scene.objects[2].shape, Shape::Mesh { .. }));
-    assert_eq!(scene.meshes[0].triangles.len(), 12);
+    assert!(matches!(&scene.scene.objects[2].shape, Shape::Mesh { .. }));
+    assert_eq!(scene.scene.meshes[0].triangles.len(), 12);
     // A uniform spectrum on an emitter is Mitsuba's equal-energy white in sRGB.
-    match &scene.lights[0] {
+    match &scene.scene.lights[0] {
         Light::Point { position, intensity } => {
             assert_eq!(*position, Vec3A::new(0.0, 3.0, 0.0));
             assert!(
@@ -352,7 +357,7 @@ fn plugins_build_the_scene_model() {
         }
         other => panic!("{other:?}"),
     }
-    assert!(matches!(scene.lights[1], Light::Directional { direction, .. } if direction == Vec3A::NEG_Y));
+    assert!(matches!(scene.scene.lights[1], Light::Directional { direction, .. } if direction == Vec3A::NEG_Y));
 }
 
 #[test]
@@ -371,8 +376,8 @@ fn serialized_shapes_are_read_by_index() {
         dir.path(),
         r#"<shape type="serialized"><string name="filename" value="two.serialized"/><integer name="shape_index" value="1"/></shape>"#,
     );
-    assert_eq!(scene.meshes[0].positions, b.positions);
-    assert_eq!(scene.meshes[0].triangles, b.triangles);
+    assert_eq!(scene.scene.meshes[0].positions, b.positions);
+    assert_eq!(scene.scene.meshes[0].triangles, b.triangles);
     let e = load_error(r#"<shape type="serialized"><string name="filename" value="missing.serialized"/></shape>"#);
     assert!(e.contains("missing.serialized"), "{e}");
 }
@@ -462,12 +467,20 @@ fn what_caustic_does_not_read_is_refused_at_its_place() {
 /// the mean ratio per channel and the relMSE against `NAME-mitsuba.exr`.
 fn against_mitsuba(name: &str) -> (Vec3A, f32) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
-    let mut scene = load_mitsuba_scene(&dir.join(format!("{name}.xml")), &[]).unwrap().scene;
+    let mut scene = load_mitsuba_scene(&dir.join(format!("{name}.xml")), &[])
+        .unwrap()
+        .into_loaded();
     scene.settings.spp = 1024;
     scene.settings.seed = 3;
     let reference = read_exr(&dir.join(format!("{name}-mitsuba.exr")), Some((32, 32))).unwrap();
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film;
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let film = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film;
     let (mut ours, mut theirs) = (Vec3A::ZERO, Vec3A::ZERO);
     let mut relmse = 0.0;
     for (a, b) in film.pixels.iter().zip(&reference.pixels) {
@@ -569,8 +582,14 @@ fn mean_of(body: &str, spp: u32) -> Vec3A {
     let dir = tempfile::tempdir().unwrap();
     let mut scene = load(dir.path(), body);
     scene.settings.spp = spp;
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {}).film;
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let film = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    )
+    .film;
     film.pixels.iter().map(|p| Vec3A::from(*p)).sum::<Vec3A>() / film.pixels.len() as f32
 }
 
@@ -638,8 +657,8 @@ fn a_large_scene_reads_in_linear_time() {
     }
     let path = write(dir.path(), "large.xml", &scene_text(&body));
     let start = std::time::Instant::now();
-    let scene = load_mitsuba_scene(&path, &[]).unwrap().scene;
-    assert_eq!(scene.objects.len(), 40_000);
+    let scene = load_mitsuba_scene(&path, &[]).unwrap().into_loaded();
+    assert_eq!(scene.scene.objects.len(), 40_000);
     assert!(start.elapsed().as_secs_f64() < 60.0, "{:?}", start.elapsed());
 }
 
@@ -692,9 +711,11 @@ fn an_orthographic_sensor_refuses_a_field_of_view_and_uneven_scales() {
         "ok.xml",
         &scene(r#"<transform name="to_world"><scale x="2" y="2"/></transform>"#),
     );
-    let s = load_mitsuba_scene(&ok, &[]).unwrap_or_else(|e| panic!("{e}")).scene;
+    let s = load_mitsuba_scene(&ok, &[])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_loaded();
     assert_eq!(
-        s.camera.projection,
+        s.scene.camera.projection,
         caustic::scene::Projection::Orthographic {
             half_width: 2.0,
             half_height: 0.0

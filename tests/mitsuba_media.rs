@@ -12,6 +12,7 @@ use caustic::analysis::converge::read_exr;
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::Vec3A;
 use caustic::scene::mitsuba::load_mitsuba_scene;
+use caustic::scene::LoadedScene;
 use caustic::scene::{MediumInterface, PhaseFunction, Scene};
 use std::path::{Path, PathBuf};
 
@@ -83,9 +84,15 @@ fn media_phase_functions_and_references_are_read() {
     let sensor_in_smoke = SENSOR.replace("</sensor>", r#"<ref id="smoke"/></sensor>"#);
     let dir = tempfile::tempdir().unwrap();
     let text = scene_text("volpathmis", MEDIA).replace(SENSOR, &sensor_in_smoke);
-    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
-    assert_eq!(scene.media.camera, Some(0));
-    assert_eq!(scene.media.list.len(), 2, "a medium referenced twice is one medium");
+    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[])
+        .unwrap()
+        .into_loaded();
+    assert_eq!(scene.scene.media.camera, Some(0));
+    assert_eq!(
+        scene.scene.media.list.len(),
+        2,
+        "a medium referenced twice is one medium"
+    );
 }
 
 #[test]
@@ -146,11 +153,11 @@ fn what_caustic_does_not_render_is_refused_at_its_place() {
 }
 
 /// Linear RGB pixels of a render with `threads` worker threads.
-fn render_pixels(scene: &Scene, threads: usize) -> Vec<Vec3A> {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(scene);
+fn render_pixels(scene: &LoadedScene, threads: usize) -> Vec<Vec3A> {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let out = pool.install(|| render(scene, accel.as_ref(), &plan, &|_, _| {}));
+    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
     out.film.pixels.iter().map(|p| Vec3A::from(*p)).collect()
 }
 
@@ -178,7 +185,9 @@ fn radiance_through_an_absorbing_slab_is_attenuated_by_its_transmittance() {
     );
     let text = scene_text("volpath", &body).replace(SENSOR, sensor);
     let dir = tempfile::tempdir().unwrap();
-    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
+    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[])
+        .unwrap()
+        .into_loaded();
     let m = mean(&render_pixels(&scene, 2));
     let expected = slab_transmittance();
     for c in 0..3 {
@@ -203,7 +212,9 @@ fn shadow_rays_through_null_boundaries_carry_the_transmittance() {
     );
     let text = scene_text("volpath", &body).replace(SENSOR, sensor);
     let dir = tempfile::tempdir().unwrap();
-    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
+    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[])
+        .unwrap()
+        .into_loaded();
     let m = mean(&render_pixels(&scene, 2));
     // (0.5 / π) · 16 / 4² · T at the centre (the 1° field keeps cos θ ≈ 1).
     let expected = slab_transmittance() * (0.5 / std::f32::consts::PI);
@@ -221,7 +232,7 @@ fn shadow_rays_through_null_boundaries_carry_the_transmittance() {
 #[test]
 fn the_media_scene_agrees_with_mitsuba() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
-    let mut scene = load_mitsuba_scene(&dir.join("media.xml"), &[]).unwrap().scene;
+    let mut scene = load_mitsuba_scene(&dir.join("media.xml"), &[]).unwrap().into_loaded();
     scene.settings.spp = 1024;
     scene.settings.seed = 5;
     let reference = read_exr(&dir.join("media-mitsuba.exr"), Some((32, 32))).unwrap();
@@ -250,7 +261,7 @@ const RELMSE_BOUND: f32 = 3e-3;
 #[test]
 fn media_renders_are_the_same_on_any_thread_count() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
-    let mut scene = load_mitsuba_scene(&dir.join("media.xml"), &[]).unwrap().scene;
+    let mut scene = load_mitsuba_scene(&dir.join("media.xml"), &[]).unwrap().into_loaded();
     scene.settings.spp = 4;
     let one = render_pixels(&scene, 1);
     let three = render_pixels(&scene, 3);
@@ -269,9 +280,11 @@ fn shadow_rays_through_a_thin_dielectric_carry_its_transmittance() {
 <emitter type="point"><point name="position" x="0" y="0" z="4"/><rgb name="intensity" value="16"/></emitter>"#;
     let text = scene_text("volpath", body).replace(SENSOR, sensor);
     let dir = tempfile::tempdir().unwrap();
-    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
+    let scene = load_mitsuba_scene(&write(dir.path(), &text), &[])
+        .unwrap()
+        .into_loaded();
     assert_eq!(
-        scene.materials[scene.objects[0].material as usize]
+        scene.scene.materials[scene.scene.objects[0].material as usize]
             .dielectric
             .map(|d| (d.thin, d.ior)),
         Some((true, 1.5))
@@ -369,7 +382,9 @@ fn null_crossings_are_not_bounces() {
             "<scene version=\"3.0.0\">\n<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"1\"/></integrator>\n{sensor}\n{body}\n</scene>\n"
         );
         let dir = tempfile::tempdir().unwrap();
-        let scene = load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene;
+        let scene = load_mitsuba_scene(&write(dir.path(), &text), &[])
+            .unwrap()
+            .into_loaded();
         mean(&render_pixels(&scene, 2))
     };
     let through_nulls = render_mean(format!("{panel}\n{nulls}"));
@@ -403,9 +418,17 @@ fn media_without_emitter_sampling_converge_to_the_same_image() {
         &format!(r#"{marker}<boolean name="sample_emitters" value="false"/>"#),
     );
     let tmp = tempfile::tempdir().unwrap();
-    let mut scene = load_mitsuba_scene(&write(tmp.path(), &text), &[]).unwrap().scene;
+    let mut scene = load_mitsuba_scene(&write(tmp.path(), &text), &[])
+        .unwrap()
+        .into_loaded();
     assert_eq!(
-        scene.media.list.iter().map(|m| m.sample_emitters).collect::<Vec<_>>(),
+        scene
+            .scene
+            .media
+            .list
+            .iter()
+            .map(|m| m.sample_emitters)
+            .collect::<Vec<_>>(),
         vec![true, false, true]
     );
     scene.settings.spp = 1024;
@@ -434,10 +457,15 @@ fn null_surfaces_under_path_are_bounces_that_block_shadow_rays() {
 </scene>"#
         );
         let dir = tempfile::tempdir().unwrap();
-        load_mitsuba_scene(&write(dir.path(), &text), &[]).unwrap().scene
+        load_mitsuba_scene(&write(dir.path(), &text), &[])
+            .unwrap()
+            .into_loaded()
     };
     let path = scene_of("path", 3);
-    assert_eq!(path.media.pass_through, caustic::scene::PassThrough::SurfaceBounce);
+    assert_eq!(
+        path.scene.media.pass_through,
+        caustic::scene::PassThrough::SurfaceBounce
+    );
     let blocked = mean(&render_pixels(&path, 2)).x;
     assert!(
         (blocked / 0.003106 - 1.0).abs() < 0.03,

@@ -11,6 +11,7 @@ use caustic::accel::brute::BruteForce;
 use caustic::accel::{Accel, TriangleTest};
 use caustic::math::{Ray, Vec2, Vec3A};
 use caustic::scene::mitsuba::load_mitsuba_scene;
+use caustic::scene::LoadedScene;
 use caustic::scene::{parse_scene, Scene, Shape, SurfaceInteraction};
 use std::f32::consts::{FRAC_1_SQRT_2, PI, SQRT_2};
 use std::path::Path;
@@ -29,8 +30,8 @@ fn scene_text(body: &str) -> String {
     format!("<scene version=\"3.0.0\">\n    {SENSOR}\n{body}\n</scene>\n")
 }
 
-fn load(body: &str) -> Scene {
-    common::mitsuba::load(&scene_text(body)).scene
+fn load(body: &str) -> LoadedScene {
+    common::mitsuba::load(&scene_text(body)).into_loaded()
 }
 
 fn load_error(body: &str) -> String {
@@ -61,7 +62,7 @@ struct Expected {
 
 fn check(shape: &str, origin: [f32; 3], dir: [f32; 3], e: Expected) {
     let scene = load(&shape.replace("BSDF", TEXTURED));
-    let si = shade(&scene, origin, dir);
+    let si = shade(&scene.scene, origin, dir);
     let uv_ok = (si.uv - Vec2::from(e.uv)).abs().max_element() <= 2e-5;
     assert!(
         near(si.p, e.p) && near(si.ng, e.n) && uv_ok && near(si.dpdu, e.dpdu) && near(si.dpdv, e.dpdv),
@@ -247,13 +248,13 @@ fn toml_and_mitsuba_give_the_same_shapes() {
         Path::new("same.toml"),
     )
     .unwrap();
-    let (Shape::Disk(a), Shape::Disk(b)) = (&xml.objects[0].shape, &toml.objects[0].shape) else {
+    let (Shape::Disk(a), Shape::Disk(b)) = (&xml.scene.objects[0].shape, &toml.scene.objects[0].shape) else {
         panic!()
     };
     let same = |x: Vec3A, y: Vec3A| (x - y).abs().max_element() < 1e-6;
     assert!(same(a.center, b.center) && same(a.a, b.a) && same(a.b, b.b) && same(a.normal, b.normal));
     assert!(same(a.normal, -Vec3A::Y), "{}", a.normal);
-    let (Shape::Cylinder(a), Shape::Cylinder(b)) = (&xml.objects[1].shape, &toml.objects[1].shape) else {
+    let (Shape::Cylinder(a), Shape::Cylinder(b)) = (&xml.scene.objects[1].shape, &toml.scene.objects[1].shape) else {
         panic!()
     };
     assert!(same(a.base, b.base) && same(a.s, b.s) && same(a.t, b.t) && same(a.axis, b.axis));
@@ -283,8 +284,10 @@ fn instances_share_their_group_and_compose_transforms() {
         <shape type="instance" id="second"><ref id="g"/>
             <transform name="to_world"><rotate z="1" angle="90"/><translate x="10"/></transform></shape>"#;
     let path = write(dir.path(), "scene.xml", &scene_text(body));
-    let scene = load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}")).scene;
-    let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+    let scene = load_mitsuba_scene(&path, &[])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_loaded();
+    let names: Vec<&str> = scene.scene.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(
         names,
         [
@@ -296,16 +299,16 @@ fn instances_share_their_group_and_compose_transforms() {
             "second/tube"
         ]
     );
-    assert_eq!(scene.meshes.len(), 1, "one mesh for both instances");
-    assert_eq!(scene.objects[0].material, scene.objects[3].material);
-    assert_eq!(scene.objects[1].material, scene.objects[4].material);
-    let Shape::Mesh { mesh, transform, .. } = &scene.objects[3].shape else {
+    assert_eq!(scene.scene.meshes.len(), 1, "one mesh for both instances");
+    assert_eq!(scene.scene.objects[0].material, scene.scene.objects[3].material);
+    assert_eq!(scene.scene.objects[1].material, scene.scene.objects[4].material);
+    let Shape::Mesh { mesh, transform, .. } = &scene.scene.objects[3].shape else {
         panic!()
     };
     assert_eq!(*mesh, 0);
     // Member first: (0, 0, 0) → (1, 0, 0), rotated → (0, 1, 0), moved → (10, 1, 0).
     assert!((transform.point(Vec3A::ZERO) - Vec3A::new(10.0, 1.0, 0.0)).length() < 1e-5);
-    let Shape::Disk(lid) = &scene.objects[4].shape else {
+    let Shape::Disk(lid) = &scene.scene.objects[4].shape else {
         panic!()
     };
     assert!((lid.center - Vec3A::new(10.0, 0.0, 2.0)).length() < 1e-5);
@@ -313,12 +316,12 @@ fn instances_share_their_group_and_compose_transforms() {
         (lid.a - Vec3A::Y).length() < 1e-6,
         "the rotation turns the disk's x axis to +y"
     );
-    let Shape::Cylinder(tube) = &scene.objects[5].shape else {
+    let Shape::Cylinder(tube) = &scene.scene.objects[5].shape else {
         panic!()
     };
     assert!((tube.base - Vec3A::new(10.0, 0.0, 0.0)).length() < 1e-5 && tube.radius == 0.5);
     // The second instance is where its transform puts it.
-    let si = shade(&scene, [10.0, 0.0, 9.0], [0.0, 0.0, -1.0]);
+    let si = shade(&scene.scene, [10.0, 0.0, 9.0], [0.0, 0.0, -1.0]);
     assert!((si.p - Vec3A::new(10.0, 0.0, 2.0)).length() < 1e-5, "{}", si.p);
 }
 
@@ -339,15 +342,17 @@ fn a_mirroring_instance_keeps_face_normals() {
         <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="face_normals" value="true"/>
             <transform name="to_world"><scale x="-1"/><translate x="-3"/></transform></shape>"#;
     let path = write(dir.path(), "scene.xml", &scene_text(body));
-    let scene = load_mitsuba_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}")).scene;
-    let mesh = |i: usize| match &scene.objects[i].shape {
+    let scene = load_mitsuba_scene(&path, &[])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_loaded();
+    let mesh = |i: usize| match &scene.scene.objects[i].shape {
         Shape::Mesh { mesh, .. } => *mesh,
         _ => panic!(),
     };
     assert_eq!(mesh(0), mesh(1), "the instances share the mesh");
     assert_ne!(mesh(0), mesh(2), "the mirrored shape's own mesh is flipped");
     for (x, z) in [(0.0, 1.0), (3.0, 0.0), (-3.0, 0.0)] {
-        let si = shade(&scene, [x, 0.0, 5.0], [0.0, 0.0, -1.0]);
+        let si = shade(&scene.scene, [x, 0.0, 5.0], [0.0, 0.0, -1.0]);
         assert!((si.p.z - z).abs() < 1e-6, "{}", si.p);
         let expected = if x < 0.0 { -1.0 } else { 1.0 };
         assert_eq!(si.ng.z, expected, "at x = {x}");
@@ -362,9 +367,9 @@ fn an_emitting_shape_without_a_bsdf_is_black() {
         r#"<shape type="disk"><emitter type="area"><rgb name="radiance" value="2, 2, 2"/></emitter></shape>
            <shape type="cylinder"/>"#,
     );
-    let lamp = &scene.materials[scene.objects[0].material as usize];
+    let lamp = &scene.scene.materials[scene.scene.objects[0].material as usize];
     assert_eq!((lamp.diffuse, lamp.emission), (Vec3A::ZERO, Vec3A::splat(2.0)));
-    let tube = &scene.materials[scene.objects[1].material as usize];
+    let tube = &scene.scene.materials[scene.scene.objects[1].material as usize];
     assert_eq!(tube.diffuse, Vec3A::splat(0.5));
 }
 

@@ -10,20 +10,21 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::photon::{trace_photons_with, PhotonRules};
 use caustic::integrator::plan::{MediumPlan, PhotonPlan};
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{parse_scene, CausticsMode, IntegratorKind, Scene};
+use caustic::scene::LoadedScene;
+use caustic::scene::{parse_scene, CausticsMode, IntegratorKind};
 use common::cli::caustic;
 use std::path::Path;
 
-fn scene(text: &str) -> Scene {
+fn scene(text: &str) -> LoadedScene {
     parse_scene(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Linear RGB pixels of a render, as f64 triples.
-fn pixels(scene: &Scene, threads: usize) -> Vec<[f64; 3]> {
-    let accel = accel::build(scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(scene);
+fn pixels(scene: &LoadedScene, threads: usize) -> Vec<[f64; 3]> {
+    let accel = accel::build(&scene.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let out = pool.install(|| render(scene, accel.as_ref(), &plan, &|_, _| {}));
+    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
     assert_eq!(out.stats.dropped_samples, 0);
     out.film
         .pixels
@@ -101,7 +102,7 @@ material = "glass"
 #[test]
 fn map_and_path_caustics_converge_to_the_same_image() {
     let with_map = scene(GLASS);
-    let plan = RenderPlan::new(&with_map);
+    let plan = RenderPlan::new(&with_map.scene, &with_map.settings);
     assert!(
         matches!(plan.photons, PhotonPlan::Run { casters: 1, .. }),
         "{:?}",
@@ -110,7 +111,10 @@ fn map_and_path_caustics_converge_to_the_same_image() {
     let mut as_paths = with_map.clone();
     as_paths.settings.photons.caustics = CausticsMode::Path;
     as_paths.settings.spp = 16_384;
-    assert_eq!(RenderPlan::new(&as_paths).photons, PhotonPlan::PathTraced);
+    assert_eq!(
+        RenderPlan::new(&as_paths.scene, &as_paths.settings).photons,
+        PhotonPlan::PathTraced
+    );
     let (m, p) = (pixels(&with_map, 2), pixels(&as_paths, 2));
     let width = 40;
     let whole = (0, 40, 0, 28);
@@ -126,7 +130,9 @@ fn map_and_path_caustics_converge_to_the_same_image() {
     let mut progressive = with_map.clone();
     progressive.settings.photons.progressive = true;
     progressive.settings.photons.count = 4_000_000;
-    assert!(RenderPlan::new(&progressive).progressive().is_some());
+    assert!(RenderPlan::new(&progressive.scene, &progressive.settings)
+        .progressive()
+        .is_some());
     let q = pixels(&progressive, 2);
     let ratio = region_mean(&q, width, whole) / region_mean(&p, width, whole);
     let caustic_ratio = region_mean(&q, width, caustic) / region_mean(&p, width, caustic);
@@ -185,10 +191,11 @@ intensity = 10.0
 "#
         ))
     };
-    let stored = |s: &Scene| {
-        let accel = accel::build(s, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
+    let stored = |s: &LoadedScene| {
+        let accel = accel::build(&s.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
         let traced = trace_photons_with(
-            s,
+            &s.scene,
+            caustic::integrator::photon::TraceSettings::of(&s.settings),
             accel.as_ref(),
             s.settings.photons.count,
             false,
@@ -301,7 +308,10 @@ material = "sand"
 fn absorbing_water_attenuates_by_the_transmittance_of_both_legs() {
     let clear = scene(&water(0.0, 0.0, true, ""));
     let murky = scene(&water(0.2, 0.0, true, ""));
-    assert!(matches!(RenderPlan::new(&murky).medium, MediumPlan::Run { .. }));
+    assert!(matches!(
+        RenderPlan::new(&murky.scene, &murky.settings).medium,
+        MediumPlan::Run { .. }
+    ));
     let (a, b) = (pixels(&clear, 2), pixels(&murky, 2));
     let mean = |p: &[[f64; 3]]| p.iter().flatten().sum::<f64>() / (p.len() * 3) as f64;
     let ratio = mean(&b) / mean(&a);
@@ -324,7 +334,7 @@ fn absorbing_water_attenuates_by_the_transmittance_of_both_legs() {
 fn volume_and_surface_maps_match_pure_path_tracing_in_water() {
     let mut with_map = scene(&water(0.05, 0.15, false, "caustics = \"map\""));
     with_map.settings.spp = 32;
-    let plan = RenderPlan::new(&with_map);
+    let plan = RenderPlan::new(&with_map.scene, &with_map.settings);
     assert!(
         matches!(plan.photons, PhotonPlan::Run { casters: 1, .. }),
         "{:?}",
@@ -409,11 +419,11 @@ fn map_caustics_resume_bit_for_bit() {
     for mut s in [scene(GLASS), scene(&water(0.05, 0.15, false, "caustics = \"map\""))] {
         s.settings.spp = 12;
         s.settings.photons.count = 40_000;
-        let accel = accel::build(&s, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
-        let plan = RenderPlan::new(&s);
+        let accel = accel::build(&s.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
+        let plan = RenderPlan::new(&s.scene, &s.settings);
         let start = || Accumulation::new(plan.width, plan.height);
         let full = render_with_control(
-            &s,
+            &s.scene,
             accel.as_ref(),
             &plan,
             start(),
@@ -421,10 +431,10 @@ fn map_caustics_resume_bit_for_bit() {
         );
         let mut first = RenderControl::to_completion(&|_, _| {});
         first.sample_limit = Some(4);
-        let part = render_with_control(&s, accel.as_ref(), &plan, start(), &first);
+        let part = render_with_control(&s.scene, accel.as_ref(), &plan, start(), &first);
         assert!(part.accumulation.samples_taken() < full.accumulation.samples_taken());
         let rest = render_with_control(
-            &s,
+            &s.scene,
             accel.as_ref(),
             &plan,
             part.accumulation,

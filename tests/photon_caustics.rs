@@ -6,10 +6,11 @@ mod common;
 
 use caustic::accel::AccelKind;
 use caustic::film::Film;
-use caustic::integrator::photon::{photon_pass, PhotonMap};
+use caustic::integrator::photon::{photon_pass, PhotonMap, TraceSettings};
 use caustic::integrator::plan::PhotonPlan;
 use caustic::integrator::{render, render_with_photons, RenderPlan};
 use caustic::math::Vec3A;
+use caustic::scene::LoadedScene;
 use caustic::scene::{
     AreaLight, Camera, Dielectric, Light, Material, Mirror, Object, RenderSettings, Scene, Shape, Sphere,
 };
@@ -23,7 +24,7 @@ fn floor(h: f32, material: u32) -> Object {
 
 /// A point light at y = 1 under a horizontal 1×1 mirror at y = 3 facing
 /// down; the reflection lands on a large floor.
-fn mirror_scene(reflectivity: f32, count: u64) -> Scene {
+fn mirror_scene(reflectivity: f32, count: u64) -> LoadedScene {
     let mirror = Material {
         mirror: Some(Mirror {
             reflectivity,
@@ -38,21 +39,25 @@ fn mirror_scene(reflectivity: f32, count: u64) -> Scene {
         ..Default::default()
     };
     settings.photons.count = count;
-    Scene {
-        media: Default::default(),
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: Camera::new(Vec3A::new(0.0, 2.0, 8.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
+            materials: vec![Material::diffuse("floor", Vec3A::splat(0.5)), mirror],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.0, 1.0, 0.0),
+                intensity: Vec3A::new(2.0, 1.0, 0.5),
+            }],
+            meshes: vec![],
+            // The mirror faces −y: u × v = (1,0,0) × (0,0,1) = (0,−1,0).
+            objects: vec![
+                floor(200.0, 0),
+                quad([-0.5, 3.0, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 1),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings,
-        camera: Camera::new(Vec3A::new(0.0, 2.0, 8.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
-        materials: vec![Material::diffuse("floor", Vec3A::splat(0.5)), mirror],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.0, 1.0, 0.0),
-            intensity: Vec3A::new(2.0, 1.0, 0.5),
-        }],
-        meshes: vec![],
-        // The mirror faces −y: u × v = (1,0,0) × (0,0,1) = (0,−1,0).
-        objects: vec![
-            floor(200.0, 0),
-            quad([-0.5, 3.0, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 1),
-        ],
     }
 }
 
@@ -70,8 +75,13 @@ fn rectangle_solid_angle(a: f64, b: f64, h: f64) -> f64 {
 fn mirror_caustic_carries_the_expected_energy() {
     for reflectivity in [1.0f32, 0.6] {
         let scene = mirror_scene(reflectivity, 200_000);
-        let accel = build(&scene, AccelKind::Brute);
-        let (map, stats) = photon_pass(&scene, accel.as_ref(), 200_000);
+        let accel = build(&scene.scene, AccelKind::Brute);
+        let (map, stats) = photon_pass(
+            &scene.scene,
+            TraceSettings::of(&scene.settings),
+            accel.as_ref(),
+            200_000,
+        );
         assert_eq!(stats.emitted, 200_000);
         assert!(stats.stored > 50_000, "{stats}");
         let omega = rectangle_solid_angle(1.0, 1.0, 2.0);
@@ -94,7 +104,7 @@ fn mirror_caustic_carries_the_expected_energy() {
 }
 
 /// A glass sphere over a floor under a point light: its caustic.
-fn glass_scene(count: u64) -> Scene {
+fn glass_scene(count: u64) -> LoadedScene {
     let glass = Material {
         dielectric: Some(Dielectric::smooth(1.5, Vec3A::ONE)),
         ..Material::diffuse("glass", Vec3A::ZERO)
@@ -109,33 +119,37 @@ fn glass_scene(count: u64) -> Scene {
     settings.photons.count = count;
     settings.photons.k = 32;
     settings.photons.max_radius = Some(0.25);
-    Scene {
-        media: Default::default(),
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: Camera::new(Vec3A::new(-1.0, 3.0, 3.0), Vec3A::new(-0.3, 0.0, 0.0), Vec3A::Y, 50.0).unwrap(),
+            materials: vec![Material::diffuse("floor", Vec3A::splat(0.8)), glass],
+            lights: vec![Light::Area(
+                AreaLight::new(
+                    Vec3A::new(1.2, 3.0, 0.0),
+                    Vec3A::new(0.2, 0.0, 0.0),
+                    Vec3A::new(0.0, 0.0, 0.2),
+                    Vec3A::splat(300.0),
+                    4,
+                )
+                .unwrap(),
+            )],
+            meshes: vec![],
+            objects: vec![
+                floor(4.0, 0),
+                Object {
+                    name: "glass".into(),
+                    shape: Shape::Sphere(Sphere {
+                        center: Vec3A::new(0.0, 0.7, 0.0),
+                        radius: 0.6,
+                    }),
+                    material: 1,
+                },
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings,
-        camera: Camera::new(Vec3A::new(-1.0, 3.0, 3.0), Vec3A::new(-0.3, 0.0, 0.0), Vec3A::Y, 50.0).unwrap(),
-        materials: vec![Material::diffuse("floor", Vec3A::splat(0.8)), glass],
-        lights: vec![Light::Area(
-            AreaLight::new(
-                Vec3A::new(1.2, 3.0, 0.0),
-                Vec3A::new(0.2, 0.0, 0.0),
-                Vec3A::new(0.0, 0.0, 0.2),
-                Vec3A::splat(300.0),
-                4,
-            )
-            .unwrap(),
-        )],
-        meshes: vec![],
-        objects: vec![
-            floor(4.0, 0),
-            Object {
-                name: "glass".into(),
-                shape: Shape::Sphere(Sphere {
-                    center: Vec3A::new(0.0, 0.7, 0.0),
-                    radius: 0.6,
-                }),
-                material: 1,
-            },
-        ],
     }
 }
 
@@ -151,10 +165,10 @@ fn more_photons_give_lower_error_against_a_reference() {
     // The caustic is really there: brighter than the same floor without photons.
     let mut dark = glass_scene(0);
     dark.settings.photons.count = 0;
-    let accel = build(&dark, AccelKind::Brute);
-    let plan = RenderPlan::new(&dark);
+    let accel = build(&dark.scene, AccelKind::Brute);
+    let plan = RenderPlan::new(&dark.scene, &dark.settings);
     assert_eq!(plan.photons, PhotonPlan::CountZero);
-    let without = render_with_photons(&dark, accel.as_ref(), &plan, None, &|_, _| {}).film;
+    let without = render_with_photons(&dark.scene, accel.as_ref(), &plan, None, &|_, _| {}).film;
     // Under the sphere, its shadow in direct light holds the focused caustic.
     let brighter = reference
         .pixels
@@ -172,19 +186,19 @@ fn more_photons_give_lower_error_against_a_reference() {
 
 fn render_caustic(count: u64) -> Film {
     let scene = glass_scene(count);
-    let accel = build(&scene, AccelKind::Brute);
-    let plan = RenderPlan::new(&scene);
-    render(&scene, accel.as_ref(), &plan, &|_, _| {}).film
+    let accel = build(&scene.scene, AccelKind::Brute);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
+    render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).film
 }
 
 #[test]
 fn photon_maps_and_images_are_identical_for_one_and_two_threads() {
     let scene = glass_scene(30_000);
-    let accel = build(&scene, AccelKind::Brute);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::Brute);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}))
+        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}))
     };
     let (one, two) = (run(1), run(2));
     assert_eq!(one.film, two.film);
@@ -197,11 +211,11 @@ fn photon_maps_and_images_are_identical_for_one_and_two_threads() {
 #[test]
 fn no_photon_pass_without_a_specular_caster() {
     let mut scene = glass_scene(10_000);
-    scene.materials[1] = Material::diffuse("not glass", Vec3A::splat(0.5));
-    let accel = build(&scene, AccelKind::Brute);
-    let plan = RenderPlan::new(&scene);
+    scene.scene.materials[1] = Material::diffuse("not glass", Vec3A::splat(0.5));
+    let accel = build(&scene.scene, AccelKind::Brute);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert_eq!(plan.photons, PhotonPlan::NoSpecularCaster);
     assert!(plan.to_string().contains("photon pass: skipped (no specular caster)"));
-    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     assert!(out.photon_map.is_none() && out.stats.photons.is_none());
 }

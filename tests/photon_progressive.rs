@@ -14,6 +14,7 @@ use caustic::integrator::plan::{PhotonPlan, ProgressivePlan};
 use caustic::integrator::{render, render_with_control, render_with_photons, RenderControl, RenderPlan};
 use caustic::job::{self, merge_partials, JobHooks, MergeRequest, RenderJob, RenderRequest};
 use caustic::math::Vec3A;
+use caustic::scene::LoadedScene;
 use caustic::scene::{
     load_scene, AreaLight, Camera, Dielectric, GatherMode, Light, Material, Object, Quad, RenderSettings,
     SampleSharing, Scene, Shape, Sphere,
@@ -32,7 +33,7 @@ fn scene_path() -> PathBuf {
 
 /// A glass sphere over a floor under a small area light (its caustic
 /// lands beside the sphere's foot), seen from above.
-fn glass_scene(spp: u32, count: u64, seed: u64) -> Scene {
+fn glass_scene(spp: u32, count: u64, seed: u64) -> LoadedScene {
     let glass = Material {
         dielectric: Some(Dielectric::smooth(1.5, Vec3A::ONE)),
         ..Material::diffuse("glass", Vec3A::ZERO)
@@ -59,9 +60,10 @@ fn glass_scene(spp: u32, count: u64, seed: u64) -> Scene {
         ),
         material: 0,
     };
-    Scene {
+    let scene = Scene {
         media: Default::default(),
-        settings,
+        ambient: Vec3A::ZERO,
+        water_medium: None,
         camera: Camera::new(Vec3A::new(-0.2, 3.0, 2.0), Vec3A::new(-0.5, 0.0, 0.0), Vec3A::Y, 40.0).unwrap(),
         materials: vec![Material::diffuse("floor", Vec3A::splat(0.8)), glass],
         lights: vec![Light::Area(
@@ -86,20 +88,21 @@ fn glass_scene(spp: u32, count: u64, seed: u64) -> Scene {
                 material: 1,
             },
         ],
-    }
+    };
+    LoadedScene { scene, settings }
 }
 
 /// The caustic part of a render: the image minus the same render without
 /// photons (the photon gather draws no random numbers, so every other
 /// term is the same sample for sample), per channel.
-fn caustic_only(scene: &Scene) -> Vec<f64> {
-    let accel = build(scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(scene);
+fn caustic_only(scene: &LoadedScene) -> Vec<f64> {
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert!(plan.runs_photons());
-    let with = render(scene, accel.as_ref(), &plan, &|_, _| {}).film;
+    let with = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).film;
     let mut dark = plan.clone();
     dark.photons = PhotonPlan::CountZero;
-    let without = render_with_photons(scene, accel.as_ref(), &dark, None, &|_, _| {}).film;
+    let without = render_with_photons(&scene.scene, accel.as_ref(), &dark, None, &|_, _| {}).film;
     with.pixels
         .iter()
         .zip(&without.pixels)
@@ -108,7 +111,7 @@ fn caustic_only(scene: &Scene) -> Vec<f64> {
         .collect()
 }
 
-fn progressive(mut scene: Scene) -> Scene {
+fn progressive(mut scene: LoadedScene) -> LoadedScene {
     scene.settings.photons.progressive = true;
     scene
 }
@@ -116,7 +119,7 @@ fn progressive(mut scene: Scene) -> Scene {
 /// One map gathered within a fixed radius: every photon within
 /// `max_radius` (k as large as allowed), the radius progressive photon
 /// mapping starts from.
-fn fixed_radius(mut scene: Scene) -> Scene {
+fn fixed_radius(mut scene: LoadedScene) -> LoadedScene {
     scene.settings.photons.k = caustic::scene::load::MAX_PHOTON_GATHER;
     scene
 }
@@ -178,7 +181,7 @@ fn progressive_caustic_converges_and_beats_a_fixed_map_of_equal_photons() {
 }
 
 /// The caustic test scene, small, progressive.
-fn caustic_scene(spp: u32) -> Scene {
+fn caustic_scene(spp: u32) -> LoadedScene {
     let mut scene = load_scene(&scene_path()).unwrap();
     let s = &mut scene.settings;
     s.width = 40;
@@ -193,7 +196,7 @@ fn caustic_scene(spp: u32) -> Scene {
 #[test]
 fn plan_shares_the_photons_and_says_what_it_skips() {
     let scene = caustic_scene(11);
-    let plan = RenderPlan::new(&scene);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let PhotonPlan::Run {
         progressive, gather, ..
     } = plan.photons
@@ -217,8 +220,8 @@ fn plan_shares_the_photons_and_says_what_it_skips() {
     );
     assert!(text.contains("precomputed irradiance skipped"), "{text}");
     // Rendering traces one map per sample index and counts them all.
-    let accel = build(&scene, AccelKind::KdTree);
-    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     let stats = out.stats.photons.as_ref().unwrap();
     assert_eq!((stats.maps, stats.emitted), (11, 11 * 1818));
     assert!(
@@ -231,11 +234,11 @@ fn plan_shares_the_photons_and_says_what_it_skips() {
 #[test]
 fn same_image_on_one_and_three_threads() {
     let scene = caustic_scene(6);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}))
+        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}))
     };
     let (one, three) = (run(1), run(3));
     assert!(one.film == three.film);
@@ -243,15 +246,20 @@ fn same_image_on_one_and_three_threads() {
     // And not the non-progressive image.
     let mut fixed = scene.clone();
     fixed.settings.photons.progressive = false;
-    let other = render(&fixed, accel.as_ref(), &RenderPlan::new(&fixed), &|_, _| {});
+    let other = render(
+        &fixed.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&fixed.scene, &fixed.settings),
+        &|_, _| {},
+    );
     assert!(other.film != one.film);
 }
 
 /// Stops a render after `stop_at` samples (mid-pass: the progress callback
 /// runs after each tile), then resumes it.
-fn interrupt_and_resume(scene: &Scene, stop_at: u64) -> (Accumulation, Accumulation) {
-    let accel = build(scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(scene);
+fn interrupt_and_resume(scene: &LoadedScene, stop_at: u64) -> (Accumulation, Accumulation) {
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let (w, h) = (plan.width, plan.height);
     let cancel = AtomicBool::new(false);
     let progress = |done: u64, _total: u64| {
@@ -263,11 +271,11 @@ fn interrupt_and_resume(scene: &Scene, stop_at: u64) -> (Accumulation, Accumulat
         cancel: Some(&cancel),
         ..RenderControl::to_completion(&progress)
     };
-    let first = render_with_control(scene, accel.as_ref(), &plan, Accumulation::new(w, h), &control);
+    let first = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(w, h), &control);
     assert!(!first.complete, "stopped at {stop_at}");
     let partial = first.accumulation.clone();
     let resumed = render_with_control(
-        scene,
+        &scene.scene,
         accel.as_ref(),
         &plan,
         first.accumulation,
@@ -280,9 +288,9 @@ fn interrupt_and_resume(scene: &Scene, stop_at: u64) -> (Accumulation, Accumulat
 #[test]
 fn interrupted_and_resumed_is_bit_identical() {
     let scene = caustic_scene(11);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
-    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
+    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
     let total = 40 * 30 * 11;
     for stop_at in [1, total / 7, total / 3, total * 2 / 3] {
         let (partial, resumed) = interrupt_and_resume(&scene, stop_at);
@@ -296,9 +304,9 @@ fn interrupted_and_resumed_is_bit_identical() {
     let mut adaptive = caustic_scene(24);
     adaptive.settings.noise_threshold = Some(0.05);
     adaptive.settings.min_spp = 8;
-    let accel = build(&adaptive, AccelKind::KdTree);
-    let plan = RenderPlan::new(&adaptive);
-    let reference = render(&adaptive, accel.as_ref(), &plan, &|_, _| {}).accumulation;
+    let accel = build(&adaptive.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&adaptive.scene, &adaptive.settings);
+    let reference = render(&adaptive.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
     assert!(reference.converged.iter().any(|&c| c), "some pixels stop early");
     assert!(reference.taken.contains(&24), "some pixels sample on");
     let stop_at = 40 * 30 * 5 + 100;

@@ -16,16 +16,16 @@ fn error(text: &str) -> String {
 fn underwater_scene_loads_with_water_fog_and_photons() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/underwater.toml");
     let scene = load_scene(&path).unwrap();
-    let water = scene.objects.iter().find(|o| o.name == "water").unwrap();
+    let water = scene.scene.objects.iter().find(|o| o.name == "water").unwrap();
     let Shape::Mesh { mesh, smooth, .. } = &water.shape else {
         panic!("water is a mesh")
     };
     assert!(smooth);
-    assert_eq!(scene.meshes[*mesh as usize].triangles.len(), 384 * 384 * 2);
-    let medium = scene.settings.medium.as_ref().unwrap();
+    assert_eq!(scene.scene.meshes[*mesh as usize].triangles.len(), 384 * 384 * 2);
+    let medium = scene.scene.water_medium.as_ref().unwrap();
     assert_eq!(medium.region.max.y, 4.5);
     assert_eq!(medium.region.min.y, 0.0);
-    let plan = RenderPlan::new(&scene);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert!(matches!(plan.photons, PhotonPlan::Run { casters: 3, .. }), "{plan}");
     assert!(matches!(plan.fog, FogPlan::Run { .. }));
     let text = plan.to_string();
@@ -44,12 +44,12 @@ fn photon_and_medium_keys_are_read() {
     let scene = parse_scene(&text, Path::new("t.toml")).unwrap();
     let p = &scene.settings.photons;
     assert_eq!((p.count, p.k, p.max_radius, p.cone_k), (1234, 10, Some(0.5), 2.0));
-    let m = scene.settings.medium.as_ref().unwrap();
+    let m = scene.scene.water_medium.as_ref().unwrap();
     assert_eq!(m.density, 0.3);
     assert_eq!(m.region.max.y, 2.0);
-    assert_eq!(scene.meshes[0].triangles.len(), 8 * 4 * 2);
+    assert_eq!(scene.scene.meshes[0].triangles.len(), 8 * 4 * 2);
     // The first crest (phase 90°) at the origin: height = amplitude.
-    let water_y = scene.meshes[0]
+    let water_y = scene.scene.meshes[0]
         .positions
         .iter()
         .find(|v| v.x == 0.0 && v.z == 0.0)

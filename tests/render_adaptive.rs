@@ -8,7 +8,8 @@ use caustic::accel::AccelKind;
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::{render, render_with_control, RenderControl, RenderOutput, RenderPlan};
 use caustic::math::{SamplerKind, Vec3A};
-use caustic::scene::{load_scene, AdaptiveGoal, IntegratorKind, Light, Scene};
+use caustic::scene::LoadedScene;
+use caustic::scene::{load_scene, AdaptiveGoal, IntegratorKind, Light};
 use common::cli::caustic;
 use common::scenes::build;
 use std::path::Path;
@@ -16,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The test Cornell-like scene with glass and an area light, path traced,
 /// adaptive: noise differs a lot between the walls and the caustic.
-fn adaptive_scene(threshold: f32) -> Scene {
+fn adaptive_scene(threshold: f32) -> LoadedScene {
     let mut scene = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/caustic.toml")).unwrap();
     let s = &mut scene.settings;
     s.width = 36;
@@ -32,10 +33,10 @@ fn adaptive_scene(threshold: f32) -> Scene {
 #[test]
 fn pixels_stop_where_the_noise_is_low_and_the_error_estimate_follows_the_noise() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert_eq!(plan.sampler, SamplerKind::Sobol);
-    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     let acc = &out.accumulation;
     assert!(out.complete);
     let (lo, hi) = acc.taken_range();
@@ -65,11 +66,11 @@ fn adaptive_stopping_does_not_bias_the_image() {
     s.width = 24;
     s.height = 18;
     s.min_spp = 8;
-    let accel = build(&reference_scene, AccelKind::KdTree);
+    let accel = build(&reference_scene.scene, AccelKind::KdTree);
     let reference = render(
-        &reference_scene,
+        &reference_scene.scene,
         accel.as_ref(),
-        &RenderPlan::new(&reference_scene),
+        &RenderPlan::new(&reference_scene.scene, &reference_scene.settings),
         &|_, _| {},
     );
     let mean = |o: &RenderOutput| o.film.pixels.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>();
@@ -84,7 +85,12 @@ fn adaptive_stopping_does_not_bias_the_image() {
                 s.settings.noise_threshold = Some(0.05);
                 s.settings.adaptive_goal = goal;
                 s.settings.seed = first_seed + seed;
-                let out = render(&s, accel.as_ref(), &RenderPlan::new(&s), &|_, _| {});
+                let out = render(
+                    &s.scene,
+                    accel.as_ref(),
+                    &RenderPlan::new(&s.scene, &s.settings),
+                    &|_, _| {},
+                );
                 assert!(out.accumulation.converged.iter().any(|&c| c));
                 mean(&out)
             })
@@ -103,11 +109,21 @@ fn adaptive_stopping_does_not_bias_the_image() {
 #[test]
 fn image_goal_spends_samples_in_proportion_to_the_noise() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene, AccelKind::KdTree);
-    let pixel = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let pixel = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    );
     let mut image_scene = scene.clone();
     image_scene.settings.adaptive_goal = AdaptiveGoal::Image;
-    let image = render(&image_scene, accel.as_ref(), &RenderPlan::new(&image_scene), &|_, _| {});
+    let image = render(
+        &image_scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&image_scene.scene, &image_scene.settings),
+        &|_, _| {},
+    );
     let (p, i) = (pixel.accumulation.samples_taken(), image.accumulation.samples_taken());
     assert!(i < p, "image goal took {i} samples, pixel goal {p}");
     let (lo, hi) = image.accumulation.taken_range();
@@ -137,12 +153,12 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
     scene.settings.height = 36;
     // One shadow ray per sample either way (the light's strata are the
     // samples), so both renders cast the same number of rays.
-    for light in &mut scene.lights {
+    for light in &mut scene.scene.lights {
         if let Light::Area(a) = light {
             a.samples = 1;
         }
     }
-    let accel = build(&scene, AccelKind::KdTree);
+    let accel = build(&scene.scene, AccelKind::KdTree);
     let rendered = |spp: u32, limit: Option<u32>, seed: u64| {
         let mut s = scene.clone();
         s.settings.spp = spp;
@@ -154,7 +170,14 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
             ..RenderControl::to_completion(&progress)
         };
         let start = Accumulation::new(s.settings.width, s.settings.height);
-        render_with_control(&s, accel.as_ref(), &RenderPlan::new(&s), start, &control).film
+        render_with_control(
+            &s.scene,
+            accel.as_ref(),
+            &RenderPlan::new(&s.scene, &s.settings),
+            start,
+            &control,
+        )
+        .film
     };
     let reference = rendered(1024, None, 1);
     let mse = |spp: u32, limit: Option<u32>| -> f64 {
@@ -180,13 +203,13 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
 #[test]
 fn adaptive_renders_are_deterministic_across_threads_and_resume() {
     let scene = adaptive_scene(0.08);
-    let accel = build(&scene, AccelKind::KdTree);
-    let mut plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let mut plan = RenderPlan::new(&scene.scene, &scene.settings);
     // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
     plan.aovs = true;
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-    let a = pool(1).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
-    let b = pool(3).install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
+    let a = pool(1).install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let b = pool(3).install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
     assert_eq!(a.accumulation, b.accumulation);
 
     // Stop mid-way (after some tiles of a later pass), save a checkpoint,
@@ -204,7 +227,7 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
             ..RenderControl::to_completion(&progress)
         };
         let start = Accumulation::new(scene.settings.width, scene.settings.height);
-        let part = render_with_control(&scene, accel.as_ref(), &plan, start, &control);
+        let part = render_with_control(&scene.scene, accel.as_ref(), &plan, start, &control);
         assert!(!part.complete);
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c.exr");
@@ -224,7 +247,7 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
         let resumed = read_checkpoint(&path).unwrap().accumulation;
         let done = pool(2).install(|| {
             render_with_control(
-                &scene,
+                &scene.scene,
                 accel.as_ref(),
                 &plan,
                 resumed,
@@ -240,15 +263,20 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
 #[test]
 fn adaptive_white_furnace_renders_the_environment() {
     let mut scene = adaptive_scene(0.02);
-    scene.lights = vec![Light::Environment {
+    scene.scene.lights = vec![Light::Environment {
         radiance: Vec3A::splat(0.5),
         map: None,
     }];
-    for m in &mut scene.materials {
+    for m in &mut scene.scene.materials {
         *m = caustic::scene::Material::diffuse(&m.name, Vec3A::ONE);
     }
-    let accel = build(&scene, AccelKind::KdTree);
-    let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let out = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    );
     let mean = out.film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / out.film.pixels.len() as f64;
     assert!((mean - 0.5).abs() < 0.005, "{mean}");
 }

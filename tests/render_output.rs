@@ -5,11 +5,38 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::{check_writable, tonemap_to_srgb8, write_exr, write_png};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::Vec3A;
+use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, Light, Material, Object, Quad, RenderSettings, Scene, Shape, Sphere};
 
-fn small_scene() -> Scene {
-    Scene {
-        media: Default::default(),
+fn small_scene() -> LoadedScene {
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: Camera::new(Vec3A::new(0.0, 2.0, 4.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
+            materials: vec![Material::diffuse("white", Vec3A::splat(0.7))],
+            lights: vec![Light::Point {
+                position: Vec3A::new(1.0, 3.0, 1.0),
+                intensity: Vec3A::new(30.0, 20.0, 10.0),
+            }],
+            meshes: vec![],
+            objects: vec![
+                Object {
+                    name: "floor".into(),
+                    shape: Shape::Quad(Quad::new(Vec3A::new(-3.0, 0.0, 3.0), Vec3A::X * 6.0, Vec3A::Z * -6.0).unwrap()),
+                    material: 0,
+                },
+                Object {
+                    name: "ball".into(),
+                    shape: Shape::Sphere(Sphere {
+                        center: Vec3A::new(0.0, 0.5, 0.0),
+                        radius: 0.5,
+                    }),
+                    material: 0,
+                },
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: RenderSettings {
             width: 37,
             height: 21,
@@ -20,28 +47,6 @@ fn small_scene() -> Scene {
             },
             ..Default::default()
         },
-        camera: Camera::new(Vec3A::new(0.0, 2.0, 4.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
-        materials: vec![Material::diffuse("white", Vec3A::splat(0.7))],
-        lights: vec![Light::Point {
-            position: Vec3A::new(1.0, 3.0, 1.0),
-            intensity: Vec3A::new(30.0, 20.0, 10.0),
-        }],
-        meshes: vec![],
-        objects: vec![
-            Object {
-                name: "floor".into(),
-                shape: Shape::Quad(Quad::new(Vec3A::new(-3.0, 0.0, 3.0), Vec3A::X * 6.0, Vec3A::Z * -6.0).unwrap()),
-                material: 0,
-            },
-            Object {
-                name: "ball".into(),
-                shape: Shape::Sphere(Sphere {
-                    center: Vec3A::new(0.0, 0.5, 0.0),
-                    radius: 0.5,
-                }),
-                material: 0,
-            },
-        ],
     }
 }
 
@@ -49,8 +54,13 @@ fn small_scene() -> Scene {
 fn rendered_film_round_trips_through_exr_and_png() {
     use exr::prelude::*;
     let scene = small_scene();
-    let accel = accel::build(&scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
-    let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let accel = accel::build(&scene.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
+    let out = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    );
     let dir = tempfile::tempdir().unwrap();
     let (png, exr_path) = (dir.path().join("img.png"), dir.path().join("img.exr"));
     check_writable(&png).unwrap();

@@ -5,11 +5,41 @@
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::Vec3A;
+use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, IntegratorKind, Light, Material, Object, RenderSettings, Scene, Shape, Sphere};
 
-fn furnace(albedo: f32, radiance: f32) -> Scene {
-    Scene {
-        media: Default::default(),
+fn furnace(albedo: f32, radiance: f32) -> LoadedScene {
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: Camera::new(Vec3A::new(0.0, 0.0, 4.0), Vec3A::ZERO, Vec3A::Y, 30.0).unwrap(),
+            materials: vec![Material::diffuse("white", Vec3A::splat(albedo))],
+            lights: vec![Light::Environment {
+                radiance: Vec3A::splat(radiance),
+                map: None,
+            }],
+            meshes: vec![],
+            objects: vec![
+                Object {
+                    name: "ball".into(),
+                    shape: Shape::Sphere(Sphere {
+                        center: Vec3A::ZERO,
+                        radius: 1.0,
+                    }),
+                    material: 0,
+                },
+                Object {
+                    name: "second ball".into(),
+                    shape: Shape::Sphere(Sphere {
+                        center: Vec3A::new(1.4, 0.8, -1.0),
+                        radius: 0.6,
+                    }),
+                    material: 0,
+                },
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: RenderSettings {
             width: 24,
             height: 24,
@@ -17,37 +47,17 @@ fn furnace(albedo: f32, radiance: f32) -> Scene {
             integrator: IntegratorKind::Path,
             ..Default::default()
         },
-        camera: Camera::new(Vec3A::new(0.0, 0.0, 4.0), Vec3A::ZERO, Vec3A::Y, 30.0).unwrap(),
-        materials: vec![Material::diffuse("white", Vec3A::splat(albedo))],
-        lights: vec![Light::Environment {
-            radiance: Vec3A::splat(radiance),
-            map: None,
-        }],
-        meshes: vec![],
-        objects: vec![
-            Object {
-                name: "ball".into(),
-                shape: Shape::Sphere(Sphere {
-                    center: Vec3A::ZERO,
-                    radius: 1.0,
-                }),
-                material: 0,
-            },
-            Object {
-                name: "second ball".into(),
-                shape: Shape::Sphere(Sphere {
-                    center: Vec3A::new(1.4, 0.8, -1.0),
-                    radius: 0.6,
-                }),
-                material: 0,
-            },
-        ],
     }
 }
 
-fn mean_and_spread(scene: &Scene) -> (f64, f64) {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let out = render(scene, accel.as_ref(), &RenderPlan::new(scene), &|_, _| {});
+fn mean_and_spread(scene: &LoadedScene) -> (f64, f64) {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let out = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    );
     let px: Vec<f64> = out
         .film
         .pixels
@@ -88,12 +98,12 @@ fn white_furnace_holds_per_pixel() {
 #[test]
 fn path_renders_are_deterministic_across_thread_counts() {
     let scene = furnace(0.7, 1.0);
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(&scene);
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
-    let a = one.install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
-    let b = three.install(|| render(&scene, accel.as_ref(), &plan, &|_, _| {}));
+    let a = one.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let b = three.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
     assert_eq!(a.film.pixels, b.film.pixels);
 }
 
@@ -118,17 +128,23 @@ fn every_scene_renders_in_path_mode() {
         s.height = 18;
         s.spp = 2;
         s.photons.count = s.photons.count.min(20_000);
-        let accel = accel::build(&scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
-        let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+        let accel = accel::build(&scene.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
+        let out = render(
+            &scene.scene,
+            accel.as_ref(),
+            &RenderPlan::new(&scene.scene, &scene.settings),
+            &|_, _| {},
+        );
         assert_eq!(out.stats.dropped_samples, 0, "{}", path.display());
         assert!(out.film.pixels.iter().all(|p| p.is_finite()), "{}", path.display());
         // Under water every light path crosses the smooth water surface
         // (light → specular → diffuse): the scene's photon map lights it.
         // A scene of glass alone has nothing diffuse to light.
         let diffuse = scene
+            .scene
             .objects
             .iter()
-            .any(|o| scene.materials[o.material as usize].is_diffuse());
+            .any(|o| scene.scene.materials[o.material as usize].is_diffuse());
         if !diffuse {
             continue;
         }

@@ -14,7 +14,8 @@ use caustic::integrator::{render, render_with_control, CheckpointHook, RenderCon
 use caustic::math::rng::mix64;
 use caustic::math::sampling::{grid_for, permute, stratified};
 use caustic::math::{Rng, Sampler, Vec3, Vec3A};
-use caustic::scene::{load_scene, Scene};
+use caustic::scene::load_scene;
+use caustic::scene::LoadedScene;
 use common::scenes::build;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -23,7 +24,7 @@ use std::time::Duration;
 
 /// The glass-sphere caustic scene, small: photon pass, dielectric Fresnel
 /// branches and spread area-light strata all take part.
-fn caustic_scene(spp: u32) -> Scene {
+fn caustic_scene(spp: u32) -> LoadedScene {
     let mut scene = load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/caustic.toml")).unwrap();
     let s = &mut scene.settings;
     s.width = 40;
@@ -34,17 +35,23 @@ fn caustic_scene(spp: u32) -> Scene {
     scene
 }
 
-fn continue_from(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, start: Accumulation) -> RenderOutput {
-    render_with_control(scene, accel, plan, start, &RenderControl::to_completion(&|_, _| {}))
+fn continue_from(scene: &LoadedScene, accel: &dyn Accel, plan: &RenderPlan, start: Accumulation) -> RenderOutput {
+    render_with_control(
+        &scene.scene,
+        accel,
+        plan,
+        start,
+        &RenderControl::to_completion(&|_, _| {}),
+    )
 }
 
 #[test]
 fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
     let scene = caustic_scene(11);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert!(plan.spread(), "the test should cover spread sampling");
-    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     assert!(reference.complete);
     assert!(reference.stats.photons.is_some(), "the photon pass should run");
 
@@ -65,7 +72,7 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
             cancel: Some(&cancel),
             ..RenderControl::to_completion(&progress)
         };
-        let first = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+        let first = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
         assert!(!first.complete, "stopped at {stop_at}");
         let taken = first.accumulation.samples_taken();
         assert!(
@@ -93,11 +100,11 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
 #[test]
 fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
     let scene = caustic_scene(6);
-    let accel = build(&scene, AccelKind::KdTree);
-    let mut plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let mut plan = RenderPlan::new(&scene.scene, &scene.settings);
     // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
     (plan.aovs, plan.noise) = (true, true);
-    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
 
     // A limit off the pass boundaries (passes go to 4, 6): the resume
     // then groups the samples into other passes than the reference did.
@@ -105,7 +112,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         sample_limit: Some(3),
         ..RenderControl::to_completion(&|_, _| {})
     };
-    let preview = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    let preview = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
     // The partial image covers the whole frame at 3 spp: no black tiles.
     assert_eq!(preview.accumulation.taken_range(), (3, 3));
     assert!(!preview.complete);
@@ -119,7 +126,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         seed: 11,
         photons: 20_000,
         accel: "kdtree".into(),
-        fingerprint: caustic::job::fingerprint(&scene, AccelKind::KdTree, ""),
+        fingerprint: caustic::job::fingerprint(&scene.scene, &scene.settings, AccelKind::KdTree, ""),
         fingerprint_format: caustic::job::fingerprint::FINGERPRINT_FORMAT,
         output: Default::default(),
         shard: None,
@@ -141,8 +148,8 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
 #[test]
 fn every_periodic_snapshot_resumes_to_the_same_image() {
     let scene = caustic_scene(9);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let snapshots = Mutex::new(Vec::new());
     let save = |acc: &Accumulation| snapshots.lock().unwrap().push(acc.clone());
     let progress = |_: u64, _: u64| {};
@@ -155,8 +162,9 @@ fn every_periodic_snapshot_resumes_to_the_same_image() {
     };
     // Two threads: snapshots are taken while the other worker renders.
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    let full = pool.install(|| render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control));
-    let reference = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let full =
+        pool.install(|| render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control));
+    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     assert!(full.film == reference.film, "checkpointing must not change the image");
 
     let snapshots = snapshots.into_inner().unwrap();
@@ -180,14 +188,14 @@ fn every_periodic_snapshot_resumes_to_the_same_image() {
 #[test]
 fn a_render_cancelled_before_it_starts_takes_no_sample() {
     let scene = caustic_scene(4);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let cancel = AtomicBool::new(true);
     let control = RenderControl {
         cancel: Some(&cancel),
         ..RenderControl::to_completion(&|_, _| {})
     };
-    let out = render_with_control(&scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    let out = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
     assert_eq!(out.accumulation.samples_taken(), 0);
     assert!(out.stats.photons.is_none(), "the photon pass is skipped too");
     assert!(!out.complete);
@@ -196,8 +204,8 @@ fn a_render_cancelled_before_it_starts_takes_no_sample() {
 /// The film as the single-loop renderer computed it before passes existed:
 /// each pixel sums its samples 0..spp in one go, then divides by the kept
 /// count. The pass loop must give exactly these values.
-fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Option<&PhotonMap>) -> Vec<Vec3> {
-    let mut integrator = Whitted::new(scene, accel, plan);
+fn single_loop_film(scene: &LoadedScene, accel: &dyn Accel, plan: &RenderPlan, map: Option<&PhotonMap>) -> Vec<Vec3> {
+    let mut integrator = Whitted::new(&scene.scene, accel, plan);
     if let Some(map) = map {
         integrator = integrator.with_photons(map);
     }
@@ -215,6 +223,7 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
                 let pixel_seed = mix64(plan.seed ^ mix64(pixel)) as u32;
                 let sub = stratified(permute(k, spp, pixel_seed), gx, gy, rng.vec2());
                 let ray = scene
+                    .scene
                     .camera
                     .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 let mut ctx = SampleContext {
@@ -240,9 +249,9 @@ fn single_loop_film(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, map: Op
 #[test]
 fn passes_give_the_single_loop_image_bit_for_bit() {
     let scene = caustic_scene(13);
-    let accel = build(&scene, AccelKind::KdTree);
-    let plan = RenderPlan::new(&scene);
-    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+    let accel = build(&scene.scene, AccelKind::KdTree);
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
+    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
     let expected = single_loop_film(&scene, accel.as_ref(), &plan, out.photon_map.as_deref());
     assert!(out.film.pixels == expected, "the pass loop changed the image");
 }

@@ -6,8 +6,8 @@ use caustic::film::Film;
 use caustic::integrator::{render, RenderOutput, RenderPlan};
 use caustic::math::{Vec3, Vec3A};
 use caustic::scene::{
-    AreaLight, Camera, Dielectric, Light, Material, Mirror, Object, Quad, RenderSettings, SampleSharing, Scene, Shape,
-    Sphere,
+    AreaLight, Camera, Dielectric, Light, LoadedScene, Material, Mirror, Object, Quad, RenderSettings, SampleSharing,
+    Scene, Shape, Sphere,
 };
 use std::f32::consts::PI;
 
@@ -49,15 +49,15 @@ fn camera(pos: [f32; 3], at: [f32; 3], up: [f32; 3], fov: f32) -> Camera {
     Camera::new(pos.into(), at.into(), up.into(), fov).unwrap()
 }
 
-fn render_scene(scene: &Scene) -> RenderOutput {
-    let accel = accel::build(scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(scene);
-    render(scene, accel.as_ref(), &plan, &|_, _| {})
+fn render_scene(s: &LoadedScene) -> RenderOutput {
+    let accel = accel::build(&s.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&s.scene, &s.settings);
+    render(&s.scene, accel.as_ref(), &plan, &|_, _| {})
 }
 
 /// Film coordinates (pixels, origin top-left) of world point `p`.
-fn project(scene: &Scene, p: Vec3A) -> (f32, f32) {
-    let c = &scene.camera;
+fn project(scene: &LoadedScene, p: Vec3A) -> (f32, f32) {
+    let c = &scene.scene.camera;
     let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
     let tan_half = (c.fov_deg.to_radians() * 0.5).tan();
     let d = p - c.position;
@@ -67,7 +67,7 @@ fn project(scene: &Scene, p: Vec3A) -> (f32, f32) {
     ((sx + 1.0) * 0.5 * w, (1.0 - sy) * 0.5 * h)
 }
 
-fn pixel_at(scene: &Scene, film: &Film, p: Vec3A) -> Vec3 {
+fn pixel_at(scene: &LoadedScene, film: &Film, p: Vec3A) -> Vec3 {
     let (x, y) = project(scene, p);
     film.get(x as u32, y as u32)
 }
@@ -80,18 +80,22 @@ fn albedo() -> Vec3A {
     Vec3A::new(0.6, 0.5, 0.4)
 }
 
-fn lit_floor_scene(spp: u32) -> Scene {
-    Scene {
-        media: Default::default(),
+fn lit_floor_scene(spp: u32) -> LoadedScene {
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([0.0, 3.0, 3.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 40.0),
+            materials: vec![Material::diffuse("floor", albedo())],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.0, 2.0, 0.0),
+                intensity: Vec3A::splat(10.0),
+            }],
+            meshes: vec![],
+            objects: vec![floor(5.0, 0)],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: settings(65, 65, spp),
-        camera: camera([0.0, 3.0, 3.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 40.0),
-        materials: vec![Material::diffuse("floor", albedo())],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.0, 2.0, 0.0),
-            intensity: Vec3A::splat(10.0),
-        }],
-        meshes: vec![],
-        objects: vec![floor(5.0, 0)],
     }
 }
 
@@ -104,7 +108,7 @@ fn diffuse_floor_under_a_point_light_has_the_analytic_radiance() {
     for p in [Vec3A::ZERO, Vec3A::new(0.8, 0.0, 0.3), Vec3A::new(-1.2, 0.0, -0.5)] {
         let (x, y) = project(&scene, p);
         // The point seen through the exact centre of that pixel.
-        let ray = scene.camera.ray(x.floor() + 0.5, y.floor() + 0.5, 65, 65);
+        let ray = scene.scene.camera.ray(x.floor() + 0.5, y.floor() + 0.5, 65, 65);
         let t = -ray.origin.y / ray.dir.y;
         let q = ray.at(t);
         let to = light - q;
@@ -121,12 +125,12 @@ fn diffuse_floor_under_a_point_light_has_the_analytic_radiance() {
 #[test]
 fn shadowed_region_is_darker_than_the_lit_floor() {
     let mut scene = lit_floor_scene(4);
-    scene.settings.ambient = Vec3A::splat(0.1);
-    scene.lights[0] = Light::Point {
+    scene.scene.ambient = Vec3A::splat(0.1);
+    scene.scene.lights[0] = Light::Point {
         position: Vec3A::new(0.0, 4.0, 0.0),
         intensity: Vec3A::splat(20.0),
     };
-    scene.objects.push(sphere([0.0, 1.0, 0.0], 0.5, 0));
+    scene.scene.objects.push(sphere([0.0, 1.0, 0.0], 0.5, 0));
     let out = render_scene(&scene);
     let shadow = pixel_at(&scene, &out.film, Vec3A::new(0.0, 0.0, 0.0));
     let lit = pixel_at(&scene, &out.film, Vec3A::new(1.5, 0.0, 0.0));
@@ -146,28 +150,32 @@ fn a_mirror_shows_the_reflected_objects_colour() {
         }),
         ..Material::diffuse("mirror", Vec3A::splat(0.5))
     };
-    let mut scene = Scene {
-        media: Default::default(),
+    let mut scene = LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 30.0),
+            materials: vec![red, mirror],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.0, 1.5, -1.0),
+                intensity: Vec3A::splat(5.0),
+            }],
+            meshes: vec![],
+            // The mirror faces the camera; the red sphere is behind the camera.
+            objects: vec![
+                quad([-2.0, -2.0, -3.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0], 1),
+                sphere([0.0, 0.0, 2.0], 0.5, 0),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: settings(33, 33, 1),
-        camera: camera([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 30.0),
-        materials: vec![red, mirror],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.0, 1.5, -1.0),
-            intensity: Vec3A::splat(5.0),
-        }],
-        meshes: vec![],
-        // The mirror faces the camera; the red sphere is behind the camera.
-        objects: vec![
-            quad([-2.0, -2.0, -3.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0], 1),
-            sphere([0.0, 0.0, 2.0], 0.5, 0),
-        ],
     };
     let out = render_scene(&scene);
     let c = out.film.get(16, 16);
     assert!(c.x > 0.01 && c.x > 5.0 * c.y && c.x > 5.0 * c.z, "centre {c}");
     assert!(out.stats.rays.secondary > 0);
     // The same wall without the mirror is grey, not red.
-    scene.materials[1].mirror = None;
+    scene.scene.materials[1].mirror = None;
     let grey = render_scene(&scene).film.get(16, 16);
     assert!(grey.x < 2.0 * grey.y, "{grey}");
 }
@@ -183,20 +191,24 @@ fn glass() -> Material {
 #[test]
 fn a_glass_sphere_refracts_and_is_not_black_at_its_centre() {
     let light = Vec3A::new(0.0, 2.5, -4.5);
-    let mut scene = Scene {
-        media: Default::default(),
+    let mut scene = LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
+            materials: vec![Material::diffuse("wall", Vec3A::splat(0.8)), glass()],
+            lights: vec![Light::Point {
+                position: light,
+                intensity: Vec3A::splat(20.0),
+            }],
+            meshes: vec![],
+            objects: vec![
+                quad([-10.0, -10.0, -5.0], [20.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
+                sphere([0.0, 0.0, -2.0], 0.7, 1),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: settings(33, 33, 4),
-        camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
-        materials: vec![Material::diffuse("wall", Vec3A::splat(0.8)), glass()],
-        lights: vec![Light::Point {
-            position: light,
-            intensity: Vec3A::splat(20.0),
-        }],
-        meshes: vec![],
-        objects: vec![
-            quad([-10.0, -10.0, -5.0], [20.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
-            sphere([0.0, 0.0, -2.0], 0.7, 1),
-        ],
     };
     let out = render_scene(&scene);
     // Straight through the centre the ray crosses two interfaces at normal
@@ -227,25 +239,29 @@ fn a_glass_ball_lens_inverts_the_wall_behind_it() {
     // front of the wall, so the view through it is flipped: right of the
     // centre one sees red. An inverted IOR ratio would make it diverge and
     // show green there.
-    let scene = Scene {
-        media: Default::default(),
+    let scene = LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
+            materials: vec![
+                Material::diffuse("red", Vec3A::new(0.8, 0.05, 0.05)),
+                Material::diffuse("green", Vec3A::new(0.05, 0.8, 0.05)),
+                glass(),
+            ],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.0, 2.5, -3.5),
+                intensity: Vec3A::splat(20.0),
+            }],
+            meshes: vec![],
+            objects: vec![
+                quad([-10.0, -10.0, -5.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
+                quad([0.0, -10.0, -5.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 1),
+                sphere([0.0, 0.0, -2.0], 0.7, 2),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: settings(33, 33, 4),
-        camera: camera([0.0, 0.0, 2.0], [0.0, 0.0, -2.0], [0.0, 1.0, 0.0], 40.0),
-        materials: vec![
-            Material::diffuse("red", Vec3A::new(0.8, 0.05, 0.05)),
-            Material::diffuse("green", Vec3A::new(0.05, 0.8, 0.05)),
-            glass(),
-        ],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.0, 2.5, -3.5),
-            intensity: Vec3A::splat(20.0),
-        }],
-        meshes: vec![],
-        objects: vec![
-            quad([-10.0, -10.0, -5.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 0),
-            quad([0.0, -10.0, -5.0], [10.0, 0.0, 0.0], [0.0, 20.0, 0.0], 1),
-            sphere([0.0, 0.0, -2.0], 0.7, 2),
-        ],
     };
     let out = render_scene(&scene);
     let through_right = pixel_at(&scene, &out.film, Vec3A::new(0.3, 0.0, -2.0));
@@ -256,7 +272,7 @@ fn a_glass_ball_lens_inverts_the_wall_behind_it() {
     assert!(beside_right.y > 3.0 * beside_right.x, "{beside_right}");
 }
 
-fn area_light_scene(with_occluder: bool, samples: u32, spp: u32) -> Scene {
+fn area_light_scene(with_occluder: bool, samples: u32, spp: u32) -> LoadedScene {
     let light = AreaLight::new(
         Vec3A::new(0.0, 3.0, 0.0),
         Vec3A::new(1.0, 0.0, 0.0),
@@ -270,14 +286,18 @@ fn area_light_scene(with_occluder: bool, samples: u32, spp: u32) -> Scene {
     if with_occluder {
         objects.push(sphere([0.0, 1.0, 0.0], 0.5, 0));
     }
-    Scene {
-        media: Default::default(),
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([1.0, 2.0, 5.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 45.0),
+            materials: vec![Material::diffuse("floor", albedo())],
+            lights: vec![Light::Area(light)],
+            meshes: vec![],
+            objects,
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings: settings(64, 48, spp),
-        camera: camera([1.0, 2.0, 5.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 45.0),
-        materials: vec![Material::diffuse("floor", albedo())],
-        lights: vec![Light::Area(light)],
-        meshes: vec![],
-        objects,
     }
 }
 
@@ -308,23 +328,23 @@ fn area_light_soft_shadow_has_a_penumbra() {
 fn the_area_light_is_visible_from_its_emitting_side_only() {
     let mut scene = area_light_scene(false, 4, 1);
     // Looking up at the light from below: its radiance.
-    scene.camera = camera([0.0, 0.5, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, -1.0], 20.0);
+    scene.scene.camera = camera([0.0, 0.5, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, -1.0], 20.0);
     let out = render_scene(&scene);
     assert_eq!(out.film.get(32, 24), Vec3::splat(8.0));
     // From above, looking down through its back: the lit floor, not 8.
-    scene.camera = camera([0.0, 5.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0], 20.0);
+    scene.scene.camera = camera([0.0, 5.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0], 20.0);
     let c = render_scene(&scene).film.get(32, 24);
     assert!(c.x > 0.0 && c.x < 2.0, "{c}");
 }
 
 /// Area light, occluder, glass sphere and a mirror: every random decision.
-fn mixed_scene(sharing: SampleSharing, spp: u32) -> Scene {
+fn mixed_scene(sharing: SampleSharing, spp: u32) -> LoadedScene {
     let mut scene = area_light_scene(true, 16, spp);
     scene.settings.sharing = sharing;
     scene.settings.width = 40;
     scene.settings.height = 30;
-    scene.materials.push(glass());
-    scene.materials.push(Material {
+    scene.scene.materials.push(glass());
+    scene.scene.materials.push(Material {
         mirror: Some(Mirror {
             reflectivity: 0.6,
             tint: Vec3A::new(0.9, 0.9, 1.0),
@@ -333,8 +353,8 @@ fn mixed_scene(sharing: SampleSharing, spp: u32) -> Scene {
         shininess: 40.0,
         ..Material::diffuse("mirror", Vec3A::new(0.2, 0.4, 0.2))
     });
-    scene.objects.push(sphere([1.6, 0.6, 0.8], 0.6, 1));
-    scene.objects.push(sphere([-0.9, 0.5, 1.5], 0.5, 2));
+    scene.scene.objects.push(sphere([1.6, 0.6, 0.8], 0.6, 1));
+    scene.scene.objects.push(sphere([-0.9, 0.5, 1.5], 0.5, 2));
     scene
 }
 
@@ -391,7 +411,7 @@ fn nan_samples_are_dropped_and_counted() {
     let mut scene = lit_floor_scene(2);
     scene.settings.width = 20;
     scene.settings.height = 20;
-    scene.lights.push(Light::Point {
+    scene.scene.lights.push(Light::Point {
         position: Vec3A::new(0.0, 2.0, 0.0),
         intensity: Vec3A::splat(f32::NAN),
     });
@@ -409,10 +429,10 @@ fn nan_samples_are_dropped_and_counted() {
 #[test]
 fn progress_reports_every_pixel() {
     let scene = area_light_scene(true, 4, 1);
-    let accel = accel::build(&scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(&scene);
+    let accel = accel::build(&scene.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let calls = std::sync::Mutex::new(Vec::new());
-    render(&scene, accel.as_ref(), &plan, &|done, total| {
+    render(&scene.scene, accel.as_ref(), &plan, &|done, total| {
         calls.lock().unwrap().push((done, total))
     });
     let mut calls = calls.into_inner().unwrap();
@@ -424,7 +444,7 @@ fn progress_reports_every_pixel() {
 
 /// The same scene at scale `s` (lengths × s, point intensities × s² so the
 /// radiance is unchanged): floor, occluding sphere, mirror sphere.
-fn scaled_scene(s: f32) -> Scene {
+fn scaled_scene(s: f32) -> LoadedScene {
     let mirror = Material {
         mirror: Some(Mirror {
             reflectivity: 0.7,
@@ -437,21 +457,25 @@ fn scaled_scene(s: f32) -> Scene {
     // about the Whitted rays' offsets.
     let mut settings = settings(48, 48, 1);
     settings.photons.count = 0;
-    Scene {
-        media: Default::default(),
+    LoadedScene {
+        scene: Scene {
+            media: Default::default(),
+            camera: camera([0.0, 3.0 * s, 3.0 * s], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0),
+            materials: vec![Material::diffuse("floor", albedo()), mirror],
+            lights: vec![Light::Point {
+                position: Vec3A::new(0.3 * s, 3.0 * s, 0.2 * s),
+                intensity: Vec3A::splat(10.0 * s * s),
+            }],
+            meshes: vec![],
+            objects: vec![
+                floor(5.0 * s, 0),
+                sphere([0.0, 0.5 * s, 0.0], 0.5 * s, 0),
+                sphere([1.2 * s, 0.4 * s, 0.6 * s], 0.4 * s, 1),
+            ],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        },
         settings,
-        camera: camera([0.0, 3.0 * s, 3.0 * s], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 50.0),
-        materials: vec![Material::diffuse("floor", albedo()), mirror],
-        lights: vec![Light::Point {
-            position: Vec3A::new(0.3 * s, 3.0 * s, 0.2 * s),
-            intensity: Vec3A::splat(10.0 * s * s),
-        }],
-        meshes: vec![],
-        objects: vec![
-            floor(5.0 * s, 0),
-            sphere([0.0, 0.5 * s, 0.0], 0.5 * s, 0),
-            sphere([1.2 * s, 0.4 * s, 0.6 * s], 0.4 * s, 1),
-        ],
     }
 }
 

@@ -634,7 +634,7 @@ fn material_microfacet_and_sides() {
         Path::new(FILE),
     )
     .unwrap();
-    let m = &scene.materials[0];
+    let m = &scene.scene.materials[0];
     assert_eq!(m.microfacet, caustic::scene::MicrofacetDistribution::Beckmann);
     assert!(m.one_sided);
 }

@@ -3,10 +3,11 @@
 
 use caustic::accel::TriangleTest;
 use caustic::math::Vec3A;
-use caustic::scene::{load_scene, parse_scene, Light, SampleSharing, Scene, SceneError, ShadingModel, Shape, ToneMap};
+use caustic::scene::LoadedScene;
+use caustic::scene::{load_scene, parse_scene, Light, SampleSharing, SceneError, ShadingModel, Shape, ToneMap};
 use std::path::Path;
 
-fn parse(text: &str) -> Scene {
+fn parse(text: &str) -> LoadedScene {
     parse_scene(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -114,19 +115,19 @@ fn every_documented_key_is_parsed() {
     );
     assert_eq!(r.output.tone_map, ToneMap::Clamp);
     assert_eq!(r.output.exposure, -1.5);
-    assert!(close(r.ambient, Vec3A::new(0.1, 0.2, 0.3)));
+    assert!(close(s.scene.ambient, Vec3A::new(0.1, 0.2, 0.3)));
     assert_eq!(r.triangle_test, TriangleTest::MollerTrumbore);
     assert_eq!(r.sharing, SampleSharing::Split);
 
-    assert!(close(s.camera.position, Vec3A::new(1.0, 2.0, 3.0)));
-    assert!(close(s.camera.forward, -Vec3A::Z));
-    assert!(close(s.camera.up, Vec3A::Y));
-    assert_eq!(s.camera.fov_deg, 30.5);
+    assert!(close(s.scene.camera.position, Vec3A::new(1.0, 2.0, 3.0)));
+    assert!(close(s.scene.camera.forward, -Vec3A::Z));
+    assert!(close(s.scene.camera.up, Vec3A::Y));
+    assert_eq!(s.scene.camera.fov_deg, 30.5);
 
     // Materials are indexed in name order.
-    let names: Vec<_> = s.materials.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<_> = s.scene.materials.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["glass", "shiny"]);
-    let shiny = &s.materials[1];
+    let shiny = &s.scene.materials[1];
     assert_eq!(shiny.model, ShadingModel::Phong);
     assert!(close(shiny.ambient, Vec3A::splat(0.1)));
     assert!(close(shiny.diffuse, Vec3A::new(0.5, 0.4, 0.3)));
@@ -136,21 +137,21 @@ fn every_documented_key_is_parsed() {
     assert_eq!(m.reflectivity, 0.25);
     assert!(close(m.tint, Vec3A::new(1.0, 0.9, 0.8)));
     assert!(shiny.dielectric.is_none());
-    let glass = &s.materials[0];
+    let glass = &s.scene.materials[0];
     assert_eq!(glass.model, ShadingModel::BlinnPhong);
     let d = glass.dielectric.unwrap();
     assert_eq!(d.ior, 1.33);
     assert!(close(d.tint, Vec3A::new(0.9, 1.0, 1.0)));
     assert!(glass.is_specular() && !glass.is_diffuse());
 
-    match &s.lights[0] {
+    match &s.scene.lights[0] {
         Light::Point { position, intensity } => {
             assert!(close(*position, Vec3A::new(0.0, 5.0, 0.0)));
             assert!(close(*intensity, Vec3A::new(8.0, 4.0, 2.0)));
         }
         l => panic!("{l:?}"),
     }
-    match &s.lights[1] {
+    match &s.scene.lights[1] {
         Light::Area(a) => {
             assert!(close(a.center, Vec3A::new(0.0, 4.0, 0.0)));
             assert!(close(a.u, Vec3A::new(2.0, 0.0, 0.0)) && close(a.v, Vec3A::Z));
@@ -162,10 +163,10 @@ fn every_documented_key_is_parsed() {
         l => panic!("{l:?}"),
     }
 
-    assert_eq!(s.objects.len(), 5);
-    assert_eq!(s.objects[0].name, "ball");
-    assert_eq!(s.objects[0].material, 0);
-    match &s.objects[0].shape {
+    assert_eq!(s.scene.objects.len(), 5);
+    assert_eq!(s.scene.objects[0].name, "ball");
+    assert_eq!(s.scene.objects[0].material, 0);
+    match &s.scene.objects[0].shape {
         Shape::Sphere(sp) => {
             assert!(close(sp.center, Vec3A::new(0.0, 1.0, -2.0)));
             assert_eq!(sp.radius, 1.5);
@@ -173,9 +174,9 @@ fn every_documented_key_is_parsed() {
         o => panic!("{o:?}"),
     }
     // Unnamed objects get `type#index`.
-    assert_eq!(s.objects[1].name, "quad#1");
-    assert_eq!(s.objects[1].material, 1);
-    let quad = |i: usize| match &s.objects[i].shape {
+    assert_eq!(s.scene.objects[1].name, "quad#1");
+    assert_eq!(s.scene.objects[1].material, 1);
+    let quad = |i: usize| match &s.scene.objects[i].shape {
         Shape::Quad(q) => *q,
         o => panic!("{o:?}"),
     };
@@ -201,7 +202,7 @@ fn every_documented_key_is_parsed() {
     assert!(close(q.u, Vec3A::X), "{q:?}");
     assert!(close(q.v, Vec3A::new(0.0, 0.0, -3.0)), "{q:?}");
     assert!(close(q.corner + (q.u + q.v) * 0.5, Vec3A::splat(3.0)));
-    assert!(s.meshes.is_empty());
+    assert!(s.scene.meshes.is_empty());
 }
 
 #[test]
@@ -229,12 +230,12 @@ v = [0, 0, 1]
     assert_eq!((r.width, r.height, r.spp, r.max_depth, r.seed), (640, 480, 1, None, 0));
     assert_eq!(r.output.tone_map, ToneMap::Aces);
     assert_eq!(r.output.exposure, 0.0);
-    assert_eq!(r.ambient, Vec3A::ZERO);
+    assert_eq!(s.scene.ambient, Vec3A::ZERO);
     assert_eq!(r.triangle_test, TriangleTest::Watertight);
     assert_eq!(r.sharing, SampleSharing::Spread);
-    assert_eq!(s.camera.fov_deg, 45.0);
-    assert!(close(s.camera.up, Vec3A::Y));
-    let m = &s.materials[0];
+    assert_eq!(s.scene.camera.fov_deg, 45.0);
+    assert!(close(s.scene.camera.up, Vec3A::Y));
+    let m = &s.scene.materials[0];
     assert_eq!(m.model, ShadingModel::BlinnPhong);
     assert!(close(m.diffuse, Vec3A::splat(0.8)));
     assert!(close(m.ambient, m.diffuse), "ambient defaults to diffuse");
@@ -242,13 +243,13 @@ v = [0, 0, 1]
     assert_eq!(m.shininess, 32.0);
     assert!(m.mirror.is_none() && m.dielectric.is_none());
     assert_eq!(
-        s.lights[0],
+        s.scene.lights[0],
         Light::Point {
             position: Vec3A::new(0.0, 5.0, 0.0),
             intensity: Vec3A::ONE
         }
     );
-    match &s.lights[1] {
+    match &s.scene.lights[1] {
         Light::Area(a) => {
             // The original report's 32 shadow rays.
             assert_eq!(a.samples, 32);
@@ -256,7 +257,7 @@ v = [0, 0, 1]
         }
         l => panic!("{l:?}"),
     }
-    assert!(s.objects.is_empty());
+    assert!(s.scene.objects.is_empty());
 }
 
 #[test]
@@ -275,13 +276,13 @@ radius = 2
 material = "m"
 "#,
     );
-    let g = &s.materials[0];
+    let g = &s.scene.materials[0];
     assert_eq!(g.dielectric.unwrap().ior, 1.5);
     assert_eq!(g.dielectric.unwrap().tint, Vec3A::ONE);
-    let m = &s.materials[1];
+    let m = &s.scene.materials[1];
     assert_eq!(m.mirror.unwrap().reflectivity, 1.0);
     assert_eq!(m.mirror.unwrap().tint, Vec3A::ONE);
-    assert_eq!(s.objects[0].material, 1);
+    assert_eq!(s.scene.objects[0].material, 1);
 }
 
 /// `[materials.NAME.disney]` alone is Mitsuba's `principled` with its
@@ -310,7 +311,7 @@ radius = 2
 material = "a"
 "#,
     );
-    let [a, b, c, d] = [0, 1, 2, 3].map(|i| (s.materials[i].diffuse, s.materials[i].disney.unwrap()));
+    let [a, b, c, d] = [0, 1, 2, 3].map(|i| (s.scene.materials[i].diffuse, s.scene.materials[i].disney.unwrap()));
     assert_eq!(a.0, Vec3A::splat(0.5));
     assert_eq!(a.1, caustic::scene::Disney::default());
     assert_eq!(b.1, caustic::scene::Disney::thin_default());
@@ -332,11 +333,11 @@ fn shipped_test_scenes_load() {
         if path.extension().is_some_and(|e| e == "toml") {
             let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
             assert!(
-                !scene.objects.is_empty() && !scene.lights.is_empty(),
+                !scene.scene.objects.is_empty() && !scene.scene.lights.is_empty(),
                 "{}",
                 path.display()
             );
-            assert!(scene.meshes.is_empty(), "test scenes use analytic shapes only");
+            assert!(scene.scene.meshes.is_empty(), "test scenes use analytic shapes only");
             count += 1;
         }
     }
@@ -348,18 +349,20 @@ fn shipped_scenes_have_what_their_tests_need() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test");
     let mirror = load_scene(&dir.join("mirror.toml")).unwrap();
     assert!(mirror
+        .scene
         .materials
         .iter()
         .any(|m| m.mirror.is_some_and(|m| m.reflectivity > 0.5)));
     let shadow = load_scene(&dir.join("shadow.toml")).unwrap();
-    match &shadow.lights[0] {
+    match &shadow.scene.lights[0] {
         Light::Area(a) => assert!(a.normal.y < -0.99, "the light must face the floor"),
         l => panic!("{l:?}"),
     }
     let spheres = load_scene(&dir.join("spheres.toml")).unwrap();
-    assert!(matches!(spheres.lights[0], Light::Point { .. }));
+    assert!(matches!(spheres.scene.lights[0], Light::Point { .. }));
     assert_eq!(
         spheres
+            .scene
             .objects
             .iter()
             .filter(|o| matches!(o.shape, Shape::Sphere(_)))
@@ -371,7 +374,7 @@ fn shipped_scenes_have_what_their_tests_need() {
 #[test]
 fn scene_bounds_cover_the_objects() {
     let s = parse(EVERY_KEY);
-    let b = s.bounds();
+    let b = s.scene.bounds();
     // The wall (centre y = 1, 6 high along y) spans y ∈ [−2, 4].
     assert!((b.min.y + 2.0).abs() < 1e-5 && (b.max.y - 4.0).abs() < 1e-5, "{b:?}");
 }
@@ -442,11 +445,11 @@ fn documented_example_is_valid_up_to_its_mesh_file() {
     let text = documented_example();
     let cut = text.find("[[objects]]\nname = \"prism\"").unwrap();
     let scene = parse_scene(&text[..cut], &path).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.objects.len(), 7);
-    assert_eq!(scene.lights.len(), 2);
-    assert_eq!(scene.materials.len(), 6);
+    assert_eq!(scene.scene.objects.len(), 7);
+    assert_eq!(scene.scene.lights.len(), 2);
+    assert_eq!(scene.scene.materials.len(), 6);
     // And it is an example to follow: no parameter the integrator ignores.
-    let warnings = caustic::integrator::lint::material_warnings(&scene);
+    let warnings = caustic::integrator::lint::material_warnings(&scene.scene, scene.settings.integrator);
     assert!(warnings.is_empty(), "{warnings:?}");
 }
 
@@ -461,7 +464,7 @@ fn blends_name_other_materials() {
          [materials.veil]\nblend = {{ second = \"mix\", weight = 0.4 }}\n"
     );
     let scene = parse_scene(&text, Path::new("blend.toml")).unwrap();
-    let by_name = |n: &str| scene.materials.iter().find(|m| m.name == n).unwrap();
+    let by_name = |n: &str| scene.scene.materials.iter().find(|m| m.name == n).unwrap();
     let mix = by_name("mix").blend.as_deref().unwrap();
     assert_eq!(mix.weight, 0.25);
     assert_eq!(mix.first.as_ref().unwrap().diffuse, by_name("red").diffuse);
@@ -510,13 +513,14 @@ fn principled_materials_read_their_keys() {
          clearcoat = 1.0, clearcoat_roughness = 0.1 }}\n\n[materials.plain]\nprincipled = {{}}\n"
     );
     let scene = parse_scene(&text, Path::new("principled.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let paint = scene.materials.iter().find(|m| m.name == "paint").unwrap();
+    let paint = scene.scene.materials.iter().find(|m| m.name == "paint").unwrap();
     let p = paint.principled.unwrap();
     assert_eq!((p.metallic, p.ior, p.transmission, p.thin), (0.25, 1.45, 0.5, false));
     assert_eq!((p.clearcoat, p.clearcoat_roughness), (1.0, 0.1));
     assert!(paint.textures.as_ref().unwrap().principled_roughness.is_some());
     assert_eq!(paint.diffuse, Vec3A::new(0.1, 0.2, 0.6));
     let plain = scene
+        .scene
         .materials
         .iter()
         .find(|m| m.name == "plain")

@@ -43,11 +43,11 @@ fn a_file_used_by_several_objects_is_loaded_once() {
     .concat();
     write(dir.path(), "scene.toml", &text);
     let scene = load_scene(&dir.path().join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.meshes.len(), 2, "two distinct files");
+    assert_eq!(scene.scene.meshes.len(), 2, "two distinct files");
     // Meshes are numbered in order of first use.
-    assert_eq!(scene.meshes[0].triangles.len(), 1);
-    assert_eq!(scene.meshes[1].triangles.len(), 2);
-    let mesh_of = |i: usize| match &scene.objects[i].shape {
+    assert_eq!(scene.scene.meshes[0].triangles.len(), 1);
+    assert_eq!(scene.scene.meshes[1].triangles.len(), 2);
+    let mesh_of = |i: usize| match &scene.scene.objects[i].shape {
         Shape::Mesh { mesh, smooth, .. } => (*mesh, *smooth),
         s => panic!("{s:?}"),
     };
@@ -55,11 +55,11 @@ fn a_file_used_by_several_objects_is_loaded_once() {
         (0..5).map(mesh_of).collect::<Vec<_>>(),
         [(0, false), (1, false), (0, false), (0, false), (1, true)]
     );
-    assert_eq!(scene.instanced_triangles(), 1 + 2 + 1 + 1 + 2);
+    assert_eq!(scene.scene.instanced_triangles(), 1 + 2 + 1 + 1 + 2);
     // Transforms: translated and uniformly scaled instances of the triangle.
-    let b = scene.object_bounds(2);
+    let b = scene.scene.object_bounds(2);
     assert!((b.min - Vec3A::new(3.0, 0.0, 0.0)).length() < 1e-5, "{b:?}");
-    let b = scene.object_bounds(3);
+    let b = scene.scene.object_bounds(3);
     assert!((b.max - Vec3A::new(2.0, 2.0, 0.0)).length() < 1e-5, "{b:?}");
 }
 
@@ -76,7 +76,7 @@ fn mesh_transform_is_scale_then_rotate_then_translate() {
     );
     write(dir.path(), "scene.toml", &text);
     let scene = load_scene(&dir.path().join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let Shape::Mesh { transform, .. } = &scene.objects[0].shape else {
+    let Shape::Mesh { transform, .. } = &scene.scene.objects[0].shape else {
         panic!()
     };
     // (1,0,0) → scale (2,0,0) → 90° about z (0,2,0) → translate (10,2,0).
@@ -119,8 +119,9 @@ fn documented_example_loads() {
     write(dir.path(), "scene.toml", example);
     write(dir.path(), "meshes/prism.off", &star_prism_off());
     let scene = load_scene(&dir.path().join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.meshes.len(), 1);
+    assert_eq!(scene.scene.meshes.len(), 1);
     let meshes = scene
+        .scene
         .objects
         .iter()
         .filter(|o| matches!(o.shape, Shape::Mesh { .. }))

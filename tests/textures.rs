@@ -8,7 +8,8 @@ mod common;
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Ray, Vec2, Vec3A};
-use caustic::scene::{parse_scene, Scene, SceneError};
+use caustic::scene::LoadedScene;
+use caustic::scene::{parse_scene, SceneError};
 use caustic::texture::{Channel, ColourSpace, Texture};
 use std::path::{Path, PathBuf};
 
@@ -40,15 +41,15 @@ fn image_dir() -> tempfile::TempDir {
     dir
 }
 
-fn load(dir: &Path, text: &str) -> Result<Scene, SceneError> {
+fn load(dir: &Path, text: &str) -> Result<LoadedScene, SceneError> {
     parse_scene(text, &dir.join("scene.toml"))
 }
 
 const CAMERA: &str = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40\n";
 
-fn hit(scene: &Scene, accel: &dyn Accel, ray: Ray) -> caustic::scene::SurfaceInteraction {
+fn hit(scene: &LoadedScene, accel: &dyn Accel, ray: Ray) -> caustic::scene::SurfaceInteraction {
     let h = accel.intersect(&ray, f32::INFINITY).expect("the ray hits");
-    scene.surface_interaction(&ray, &h)
+    scene.scene.surface_interaction(&ray, &h)
 }
 
 #[test]
@@ -82,7 +83,7 @@ material = \"a\"
 "
     );
     let scene = load(dir.path(), &text).unwrap();
-    let a = &scene.materials[0];
+    let a = &scene.scene.materials[0];
     let Some(Texture::Image(rb)) = &a.textures.as_ref().unwrap().diffuse else {
         panic!("{:?}", a.textures.as_ref().unwrap().diffuse)
     };
@@ -116,7 +117,7 @@ material = \"a\"
     );
     // Constants stand for the texture's upper bound.
     assert_eq!(a.diffuse, Vec3A::new(0.5, 0.0, 0.5));
-    let b = &scene.materials[1];
+    let b = &scene.scene.materials[1];
     let alpha = b.textures.as_ref().unwrap().alpha.as_ref().unwrap();
     assert_eq!(alpha.cutoff, 0.25);
     let Texture::Image(mask) = &alpha.texture else { panic!() };
@@ -168,7 +169,7 @@ material = \"m\"
 "
     );
     let scene = load(dir.path(), &text).unwrap();
-    let accel = accel::build(&scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
+    let accel = accel::build(&scene.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
     let close = |a: Vec2, b: Vec2| (a - b).length() < 1e-4;
     // Sphere, Mitsuba's convention about the world axes: +x is (0, ½), +y is (¼, ½), +z is v = 0.
     let si = hit(&scene, accel.as_ref(), Ray::new(Vec3A::new(5.0, 0.0, 0.0), -Vec3A::X));
@@ -228,8 +229,13 @@ material = \"m\"
 "
     );
     let scene = load(dir.path(), &text).unwrap();
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let out = render(&scene, accel.as_ref(), &RenderPlan::new(&scene), &|_, _| {});
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let out = render(
+        &scene.scene,
+        accel.as_ref(),
+        &RenderPlan::new(&scene.scene, &scene.settings),
+        &|_, _| {},
+    );
     let left = out.film.get(10, 16);
     let right = out.film.get(22, 16);
     // A white sky over a Lambertian quad: the radiance is the albedo (up to noise).
@@ -274,7 +280,7 @@ material = \"n\"
 "
     );
     let scene = load(dir.path(), &text).unwrap();
-    let accel = accel::build(&scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
+    let accel = accel::build(&scene.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
     // The quad faces +z with u along +y: the normal leans toward +y.
     let si = hit(&scene, accel.as_ref(), Ray::new(Vec3A::new(0.0, 0.0, 5.0), -Vec3A::Z));
     assert_eq!(si.ng, Vec3A::Z);
@@ -337,7 +343,7 @@ material = \"back\"
     }
     let accels: Vec<Box<dyn Accel>> = kinds
         .iter()
-        .map(|&k| accel::build(&scene, k, &AccelOptions::default()).unwrap())
+        .map(|&k| accel::build(&scene.scene, k, &AccelOptions::default()).unwrap())
         .collect();
     let down = -Vec3A::Z;
     for a in &accels {

@@ -126,7 +126,7 @@ radius = 0.3
 material = "lamp"
 "#;
 
-fn toml(text: &str) -> Result<caustic::scene::Scene, String> {
+fn toml(text: &str) -> Result<caustic::scene::LoadedScene, String> {
     caustic::scene::parse_scene(text, Path::new("scene.toml")).map_err(|e| e.to_string())
 }
 
@@ -135,11 +135,12 @@ fn a_toml_scene_with_media_equals_its_mitsuba_twin() {
     let xml = common::mitsuba::load(XML);
     assert!(xml.warnings.is_empty(), "{:?}", xml.warnings);
     let ours = toml(TOML).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(ours.media.list.len(), 3);
+    assert_eq!(ours.scene.media.list.len(), 3);
     // In name order: cloud, fog, water.
-    assert_eq!(ours.media.camera, Some(1));
-    assert_same_scene(&xml.scene, &ours, Names::Ignored);
-    let (a, b) = (render_small(&xml.scene, 16, 16, 4), render_small(&ours, 16, 16, 4));
+    assert_eq!(ours.scene.media.camera, Some(1));
+    let xml = xml.into_loaded();
+    assert_same_scene(&xml, &ours, Names::Ignored);
+    let (a, b) = (render_small(&xml, 16, 16, 4), render_small(&ours, 16, 16, 4));
     assert!(a.iter().any(|p| p.iter().any(|c| *c > 0.0)));
     assert_eq!(a, b, "the two scenes render differently");
 }
@@ -219,10 +220,10 @@ fn the_documented_media_example_loads() {
     let begin = section.find("```toml\n").unwrap() + "```toml\n".len();
     let end = section[begin..].find("```").unwrap();
     let scene = toml(&section[begin..begin + end]).unwrap_or_else(|e| panic!("{e}"));
-    let names: Vec<&str> = scene.media.list.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<&str> = scene.scene.media.list.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["fog", "ink"]);
-    assert_eq!(scene.media.camera, Some(0));
-    assert_eq!(scene.media.interface(1).interior, Some(1));
-    assert_eq!(scene.media.pass_through, caustic::scene::PassThrough::Volumetric);
-    assert!(scene.is_volumetric());
+    assert_eq!(scene.scene.media.camera, Some(0));
+    assert_eq!(scene.scene.media.interface(1).interior, Some(1));
+    assert_eq!(scene.scene.media.pass_through, caustic::scene::PassThrough::Volumetric);
+    assert!(scene.scene.is_volumetric());
 }

@@ -8,7 +8,7 @@ use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Accumulation;
 use caustic::integrator::{self, RenderControl, RenderPlan};
 use caustic::math::Vec3A;
-use caustic::scene::Scene;
+use caustic::scene::LoadedScene;
 use caustic::view::{EditableScene, ViewerCore};
 use std::path::Path;
 use std::time::Duration;
@@ -17,23 +17,23 @@ const TIMEOUT: Duration = Duration::from_secs(300);
 
 fn cornell() -> EditableScene {
     let mut e = EditableScene::open(Path::new("scenes/cornell.toml")).unwrap();
-    e.scene.settings.spp = 8;
-    e.scene.settings.photons.count = 20_000;
+    e.settings.spp = 8;
+    e.settings.photons.count = 20_000;
     e
 }
 
 /// The batch render core's image of `scene` after `spp` samples (the
 /// plan's target stays the scene's, as in the viewer's passes).
-fn batch_image(scene: &Scene, spp: u32) -> Vec<caustic::math::Vec3> {
-    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(scene);
-    let map = integrator::render::photon_pass_for(scene, &*accel, &plan).map(|(m, _)| m);
+fn batch_image(scene: &LoadedScene, spp: u32) -> Vec<caustic::math::Vec3> {
+    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(&scene.scene, &scene.settings);
+    let map = integrator::render::photon_pass_for(&scene.scene, &*accel, &plan).map(|(m, _)| m);
     let control = RenderControl {
         sample_limit: Some(spp),
         ..RenderControl::to_completion(&|_, _| {})
     };
     let start = Accumulation::new(plan.width, plan.height);
-    integrator::render_progressive(scene, &*accel, &plan, map.as_ref(), start, &control)
+    integrator::render_progressive(&scene.scene, &*accel, &plan, map.as_ref(), start, &control)
         .film
         .pixels
 }
@@ -161,18 +161,18 @@ fn saved_scene_renders_what_the_viewer_shows() {
     let out = dir.path().join("edited.toml");
     e.save(&out).unwrap();
     let again = caustic::scene::load_scene(&out).unwrap();
-    assert_eq!(again.lights, e.scene.lights);
-    assert_eq!(again.materials, e.scene.materials);
+    assert_eq!(again.scene.lights, e.scene.lights);
+    assert_eq!(again.scene.materials, e.scene.materials);
     assert_eq!(again.settings.spp, 8);
-    assert!((again.camera.position - e.scene.camera.position).length() < 1e-5);
-    assert!((again.camera.forward - e.scene.camera.forward).length() < 1e-5);
+    assert!((again.scene.camera.position - e.scene.camera.position).length() < 1e-5);
+    assert!((again.scene.camera.forward - e.scene.camera.forward).length() < 1e-5);
     // `caustic render` of the saved file gives the viewer's image exactly.
     let mut again = again;
-    let mut shown = e.scene.clone();
+    let mut shown = e.snapshot();
     for s in [&mut again.settings, &mut shown.settings] {
         (s.width, s.height) = (40, 24);
     }
-    assert_eq!(again.camera, shown.camera);
+    assert_eq!(again.scene.camera, shown.scene.camera);
     assert!(
         batch_image(&again, 2) == batch_image(&shown, 2),
         "the saved scene renders differently"
@@ -216,7 +216,7 @@ mod window {
     fn a_slider_changes_the_scene_the_next_pass_renders() {
         let mut h = harness();
         step_until(&mut h, full_frame);
-        let before = h.state().core.submitted_scene().unwrap().lights[0].clone();
+        let before = h.state().core.submitted_scene().unwrap().scene.lights[0].clone();
         let generation = h.state().core.generation();
         h.get_by_role_and_label(egui::accesskit::Role::Slider, "intensity")
             .focus();
@@ -225,7 +225,7 @@ mod window {
         h.step();
         let app = h.state();
         assert!(app.core.generation() > generation, "no new request");
-        let after = &app.core.submitted_scene().unwrap().lights[0];
+        let after = &app.core.submitted_scene().unwrap().scene.lights[0];
         assert_ne!(*after, before, "the slider did not reach the scene");
         step_until(&mut h, full_frame);
     }
@@ -284,7 +284,7 @@ mod window {
         let after = h.state().core.edit.orbit;
         assert!(after.yaw != before.yaw, "the drag did not orbit the camera");
         assert_eq!(after.distance, before.distance);
-        let cam = &h.state().core.submitted_scene().unwrap().camera;
+        let cam = &h.state().core.submitted_scene().unwrap().scene.camera;
         assert_eq!(*cam, after.camera().unwrap());
     }
 }

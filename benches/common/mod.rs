@@ -7,7 +7,7 @@
 use caustic::geometry::generate;
 use caustic::io::assets;
 use caustic::math::{Transform, Vec3, Vec3A};
-use caustic::scene::{self, AreaLight, Camera, Light, Material, Object, Quad, RenderSettings, Scene, Shape};
+use caustic::scene::{self, AreaLight, Camera, Light, Material, Object, Quad, Scene, Shape};
 use criterion::Criterion;
 use std::path::Path;
 use std::sync::Arc;
@@ -29,7 +29,8 @@ pub fn torus_scene() -> Scene {
     let torus = generate::torus(1.0, 0.35, 512, 128);
     Scene {
         media: Default::default(),
-        settings: RenderSettings::default(),
+        ambient: Vec3A::ZERO,
+        water_medium: None,
         camera: Camera::new(Vec3A::new(0.0, 1.6, 4.3), Vec3A::new(0.0, 0.5, 0.0), Vec3A::Y, 40.0)
             .expect("valid camera"),
         materials: vec![
@@ -108,7 +109,7 @@ pub fn dragon_scene() -> Option<Scene> {
         return None;
     }
     match scene::load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon.toml")) {
-        Ok(s) => Some(s),
+        Ok(s) => Some(s.scene),
         Err(e) => {
             eprintln!("dragon benches skipped: {e}");
             None

@@ -302,12 +302,11 @@ mod tests {
     use crate::accel::brute::BruteForce;
     use crate::accel::TriangleTest;
     use crate::math::Vec3;
-    use crate::scene::{Camera, Material, Object, Quad, RenderSettings, Shape, Sphere};
+    use crate::scene::{Camera, Material, Object, Quad, Shape, Sphere};
 
     fn floor_scene() -> Scene {
         Scene {
             media: Default::default(),
-            settings: RenderSettings::default(),
             camera: Camera::new(Vec3A::new(0.0, 1.0, 5.0), Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("white", Vec3A::ONE)],
             lights: vec![Light::Point {
@@ -327,6 +326,8 @@ mod tests {
                 ),
                 material: 0,
             }],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
         }
     }
 

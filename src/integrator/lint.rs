@@ -3,7 +3,7 @@
 //! info` and at the start of a render; they never stop a render.
 
 use crate::math::Vec3A;
-use crate::scene::{IntegratorKind, Light, Material, Scene};
+use crate::scene::{IntegratorKind, Light, Material, RenderSettings, Scene};
 
 /// One warning about one material.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,17 +20,22 @@ impl std::fmt::Display for MaterialWarning {
     }
 }
 
-/// Every warning about `scene`, as shown to the user.
-pub fn warnings(scene: &Scene) -> Vec<String> {
-    settings_warnings(scene)
+/// Every warning about `scene` rendered with `settings`, as shown to the user.
+pub fn warnings(scene: &Scene, settings: &RenderSettings) -> Vec<String> {
+    settings_warnings(scene, settings)
         .into_iter()
-        .chain(material_warnings(scene).iter().map(ToString::to_string))
+        .chain(
+            material_warnings(scene, settings.integrator)
+                .iter()
+                .map(ToString::to_string),
+        )
         .collect()
 }
 
-/// Warnings about the `[render]` settings.
-pub fn settings_warnings(scene: &Scene) -> Vec<String> {
-    let s = &scene.settings;
+/// Warnings about the `[render]` settings (and the scene's terms that
+/// `settings`' integrator ignores).
+pub fn settings_warnings(scene: &Scene, settings: &RenderSettings) -> Vec<String> {
+    let s = settings;
     let mut out = Vec::new();
     if !s.denoise && s.denoise_quality != crate::film::denoise::DenoiseQuality::default() {
         out.push(format!(
@@ -39,10 +44,10 @@ pub fn settings_warnings(scene: &Scene) -> Vec<String> {
         ));
     }
     if s.integrator == IntegratorKind::Path {
-        if s.ambient.max_element() > 0.0 {
+        if scene.ambient.max_element() > 0.0 {
             out.push("`[render] ambient` is ignored: the path integrator computes indirect light".into());
         }
-        if s.medium.as_ref().is_some_and(|m| m.volume.is_none()) {
+        if scene.water_medium.as_ref().is_some_and(|m| m.volume.is_none()) {
             out.push(
                 "`[medium]` has no `absorption` and `scattering`: the path integrator renders no medium \
                  (the exponential fog is the Whitted integrator's model)"
@@ -71,10 +76,10 @@ fn over_one(c: Vec3A) -> Option<String> {
     (v > 1.0 + 1e-6).then(|| format!("{v:.3} in {}", names[i]))
 }
 
-/// Warnings for every material used by an object of `scene`.
-pub fn material_warnings(scene: &Scene) -> Vec<MaterialWarning> {
+/// Warnings for every material used by an object of `scene`, rendered by
+/// `integrator`.
+pub fn material_warnings(scene: &Scene, integrator: IntegratorKind) -> Vec<MaterialWarning> {
     let has_delta_light = scene.lights.iter().any(Light::is_delta);
-    let integrator = scene.settings.integrator;
     let mut used = vec![false; scene.materials.len()];
     for o in &scene.objects {
         used[o.material as usize] = true;
@@ -235,29 +240,33 @@ mod tests {
     #[test]
     fn a_denoising_quality_without_denoising_is_named() {
         let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"));
-        let mut scene = crate::scene::load_scene(path).unwrap();
-        assert!(settings_warnings(&scene).is_empty());
-        scene.settings.denoise_quality = crate::film::denoise::DenoiseQuality::Fast;
-        let w = settings_warnings(&scene);
+        let crate::scene::LoadedScene { scene, mut settings } = crate::scene::load_scene(path).unwrap();
+        assert!(settings_warnings(&scene, &settings).is_empty());
+        settings.denoise_quality = crate::film::denoise::DenoiseQuality::Fast;
+        let w = settings_warnings(&scene, &settings);
         assert!(w.len() == 1 && w[0].contains("`fast` is ignored"), "{w:?}");
-        scene.settings.denoise = true;
-        assert!(settings_warnings(&scene).is_empty());
+        settings.denoise = true;
+        assert!(settings_warnings(&scene, &settings).is_empty());
     }
 
     #[test]
     fn a_medium_without_coefficients_is_named_in_path_mode() {
         let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/underwater.toml"));
         let text = std::fs::read_to_string(path).unwrap();
-        let with_volume = crate::scene::load::parse_scene(&text, path).unwrap();
-        assert!(with_volume.settings.medium.as_ref().unwrap().volume.is_some());
-        let mut traced = with_volume.clone();
-        traced.settings.integrator = IntegratorKind::Path;
-        assert!(settings_warnings(&traced).iter().all(|w| !w.contains("[medium]")));
-        let mut fog_only = traced.clone();
-        fog_only.settings.medium.as_mut().unwrap().volume = None;
-        let w = settings_warnings(&fog_only);
+        let crate::scene::LoadedScene { scene, settings } = crate::scene::load::parse_scene(&text, path).unwrap();
+        assert!(scene.water_medium.as_ref().unwrap().volume.is_some());
+        let mut traced = settings.clone();
+        traced.integrator = IntegratorKind::Path;
+        assert!(settings_warnings(&scene, &traced)
+            .iter()
+            .all(|w| !w.contains("[medium]")));
+        let mut fog_only = scene.clone();
+        fog_only.water_medium.as_mut().unwrap().volume = None;
+        let w = settings_warnings(&fog_only, &traced);
         assert!(w.iter().any(|w| w.contains("renders no medium")), "{w:?}");
         // The Whitted integrator renders the fog of the same table.
-        assert!(settings_warnings(&with_volume).iter().all(|w| !w.contains("[medium]")));
+        assert!(settings_warnings(&scene, &settings)
+            .iter()
+            .all(|w| !w.contains("[medium]")));
     }
 }

@@ -219,7 +219,7 @@ pub struct WaterVolume<'a> {
 impl<'a> WaterVolume<'a> {
     /// The scene's water, when it has a medium with coefficients.
     pub fn of(scene: &'a Scene) -> Option<Self> {
-        let medium = scene.settings.medium.as_ref()?;
+        let medium = scene.water_medium.as_ref()?;
         let coefficients = Homogeneous::new(medium.volume.as_ref()?);
         let mut bounds = medium.region;
         bounds.max.y = medium.surface.center.y + medium.surface.max_amplitude();

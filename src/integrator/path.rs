@@ -109,12 +109,12 @@ impl<'a> PathTracer<'a> {
             max_depth: plan.max_depth,
             gather,
             caustics: None,
-            caustic_depth: scene.settings.max_depth.unwrap_or(PHOTON_PATH_DEPTH),
+            caustic_depth: plan.photon_trace.max_depth.unwrap_or(PHOTON_PATH_DEPTH),
             water: match plan.medium {
                 MediumPlan::Run { .. } => WaterVolume::of(scene),
                 _ => None,
             },
-            hide_emitters: scene.settings.hide_emitters,
+            hide_emitters: plan.hide_emitters,
         }
     }
 

@@ -8,10 +8,12 @@
 //! Each pass has its own "ran / skipped because ..." line in the `Display`
 //! output.
 
-use super::photon::PhotonRules;
+use super::photon::{PhotonRules, TraceSettings};
 use crate::bsdf::material_flags;
 use crate::math::SamplerKind;
-use crate::scene::{AdaptiveGoal, CausticsMode, GatherMode, IntegratorKind, Light, SampleSharing, Scene};
+use crate::scene::{
+    AdaptiveGoal, CausticsMode, GatherMode, IntegratorKind, Light, RenderSettings, SampleSharing, Scene,
+};
 use std::fmt;
 
 /// Bounces before the path integrator's Russian roulette may end a path.
@@ -226,6 +228,9 @@ pub struct RenderPlan {
     pub seed: u64,
     /// Ambient term active (scene ambient light is not black).
     pub ambient: bool,
+    /// Emitters seen directly from the camera are black
+    /// ([`RenderSettings::hide_emitters`]).
+    pub hide_emitters: bool,
     /// One entry per light, in scene order.
     pub lights: Vec<LightPlan>,
     /// Secondary rays.
@@ -237,6 +242,8 @@ pub struct RenderPlan {
     /// How the photons scatter: the Whitted integrator's rules, or the path
     /// integrator's BSDFs and medium (`[photons] caustics = "map"`).
     pub photon_rules: PhotonRules,
+    /// The photon paths' seed and bounce limit.
+    pub photon_trace: TraceSettings,
     /// The path integrator's participating medium in the water.
     pub medium: MediumPlan,
     /// Fog.
@@ -256,9 +263,9 @@ pub struct RenderPlan {
 }
 
 impl RenderPlan {
-    /// Decides what runs for `scene`.
-    pub fn new(scene: &Scene) -> RenderPlan {
-        let s = &scene.settings;
+    /// Decides what runs for `scene` rendered with `settings`.
+    pub fn new(scene: &Scene, settings: &RenderSettings) -> RenderPlan {
+        let s = settings;
         let spp = s.spp.max(1);
         let sharing = if s.integrator == IntegratorKind::Path {
             Sharing::Independent
@@ -382,7 +389,7 @@ impl RenderPlan {
                 }),
             }
         };
-        let medium = match s.medium.as_ref().map(|m| m.volume) {
+        let medium = match scene.water_medium.as_ref().map(|m| m.volume) {
             Some(Some(v)) if path => MediumPlan::Run {
                 absorption: v.absorption,
                 scattering: v.scattering,
@@ -404,7 +411,7 @@ impl RenderPlan {
             },
             _ => MediumPlan::None,
         };
-        let fog = match &s.medium {
+        let fog = match &scene.water_medium {
             Some(_) if path => FogPlan::PathTraced,
             Some(m) => FogPlan::Run { density: m.density },
             None => FogPlan::NoMedium,
@@ -422,7 +429,8 @@ impl RenderPlan {
                 goal: s.adaptive_goal,
             }),
             seed: s.seed,
-            ambient: !path && s.ambient.max_element() > 0.0,
+            ambient: !path && scene.ambient.max_element() > 0.0,
+            hide_emitters: s.hide_emitters,
             lights,
             secondary,
             sharing,
@@ -432,6 +440,7 @@ impl RenderPlan {
             } else {
                 PhotonRules::Whitted
             },
+            photon_trace: TraceSettings::of(s),
             medium,
             fog,
             keep_photon_positions: false,
@@ -796,9 +805,13 @@ impl fmt::Display for RenderPlan {
 mod tests {
     use super::*;
     use crate::math::Vec3A;
-    use crate::scene::{AreaLight, Camera, Material, Mirror, Object, RenderSettings, Shape, Sphere};
+    use crate::scene::{AreaLight, Camera, LoadedScene, Material, Mirror, Object, RenderSettings, Shape, Sphere};
 
-    fn scene(spp: u32, sharing: SampleSharing, mirror_used: bool) -> Scene {
+    fn plan_of(s: &LoadedScene) -> RenderPlan {
+        RenderPlan::new(&s.scene, &s.settings)
+    }
+
+    fn scene(spp: u32, sharing: SampleSharing, mirror_used: bool) -> LoadedScene {
         let mirror = Material {
             mirror: Some(Mirror {
                 reflectivity: 1.0,
@@ -814,13 +827,10 @@ mod tests {
             }),
             material,
         };
-        Scene {
+        let scene = Scene {
             media: Default::default(),
-            settings: RenderSettings {
-                spp,
-                sharing,
-                ..Default::default()
-            },
+            ambient: Vec3A::ZERO,
+            water_medium: None,
             camera: Camera::new(Vec3A::Z * 5.0, Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("white", Vec3A::ONE), mirror],
             lights: vec![
@@ -832,12 +842,20 @@ mod tests {
             ],
             meshes: vec![],
             objects: vec![ball(0), ball(if mirror_used { 1 } else { 0 })],
+        };
+        LoadedScene {
+            scene,
+            settings: RenderSettings {
+                spp,
+                sharing,
+                ..Default::default()
+            },
         }
     }
 
     #[test]
     fn point_lights_get_one_ray_and_area_lights_their_strata() {
-        let plan = RenderPlan::new(&scene(1, SampleSharing::Spread, true));
+        let plan = plan_of(&scene(1, SampleSharing::Spread, true));
         assert_eq!(plan.sharing, Sharing::SplitSingleSample);
         assert_eq!(plan.lights[0].shadow, ShadowSampling::Hard);
         assert_eq!(
@@ -848,7 +866,7 @@ mod tests {
                 rays_per_sample: 32
             }
         );
-        let spread = RenderPlan::new(&scene(4, SampleSharing::Spread, true));
+        let spread = plan_of(&scene(4, SampleSharing::Spread, true));
         assert!(spread.spread());
         assert_eq!(
             spread.lights[1].shadow,
@@ -859,7 +877,7 @@ mod tests {
             }
         );
         // More samples than strata: refined to one stratum per sample.
-        let many = RenderPlan::new(&scene(64, SampleSharing::Spread, true));
+        let many = plan_of(&scene(64, SampleSharing::Spread, true));
         assert!(matches!(
             many.lights[1].shadow,
             ShadowSampling::Stratified {
@@ -868,7 +886,7 @@ mod tests {
                 ..
             }
         ));
-        let split = RenderPlan::new(&scene(4, SampleSharing::Split, true));
+        let split = plan_of(&scene(4, SampleSharing::Split, true));
         assert_eq!(split.sharing, Sharing::SplitRequested);
         assert!(matches!(
             split.lights[1].shadow,
@@ -882,13 +900,13 @@ mod tests {
 
     #[test]
     fn secondary_rays_only_for_used_specular_materials() {
-        let with = RenderPlan::new(&scene(1, SampleSharing::Split, true));
+        let with = plan_of(&scene(1, SampleSharing::Split, true));
         assert!(with.traces_secondary());
         assert!(with
             .to_string()
             .contains("secondary rays: ran, 1 mirror/glass object(s)"));
         // The mirror material exists but no object uses it.
-        let without = RenderPlan::new(&scene(1, SampleSharing::Split, false));
+        let without = plan_of(&scene(1, SampleSharing::Split, false));
         assert_eq!(without.secondary, Secondary::NoSpecularObject);
         let text = without.to_string();
         assert!(
@@ -910,13 +928,13 @@ mod tests {
             .contains("photon pass: ran, 1000000 photons, emission restricted to 1 specular caster(s)"));
         let mut s = scene(4, SampleSharing::Spread, true);
         s.settings.max_depth = Some(0);
-        let flat = RenderPlan::new(&s);
+        let flat = plan_of(&s);
         assert_eq!(flat.secondary, Secondary::DepthZero);
         assert_eq!(flat.photons, PhotonPlan::DepthZero);
         assert!(flat.to_string().contains("spread over 4 samples, at most 8 per sample"));
-        s.lights.clear();
-        assert!(RenderPlan::new(&s).to_string().contains("skipped (no lights)"));
-        assert_eq!(RenderPlan::new(&s).photons, PhotonPlan::NoLights);
+        s.scene.lights.clear();
+        assert!(plan_of(&s).to_string().contains("skipped (no lights)"));
+        assert_eq!(plan_of(&s).photons, PhotonPlan::NoLights);
     }
 
     /// The path integrator's caustic map is emitted toward the objects whose
@@ -953,7 +971,7 @@ mod tests {
             }),
             ..Material::diffuse("principled", Vec3A::splat(0.8))
         };
-        s.materials = vec![
+        s.scene.materials = vec![
             white.clone(),
             blend(Some(white.clone()), Some(glass)),
             principled(0.0, 0.0, 1.0),
@@ -968,18 +986,18 @@ mod tests {
             }),
             material,
         };
-        s.objects = (0..5).map(ball).collect();
-        let casters = |s: &Scene| match RenderPlan::new(s).photons {
+        s.scene.objects = (0..5).map(ball).collect();
+        let casters = |s: &LoadedScene| match plan_of(s).photons {
             PhotonPlan::Run { casters, .. } => casters,
             other => panic!("no photon pass: {other:?}"),
         };
         assert_eq!(casters(&s), 2);
-        assert_eq!(super::super::photon::emit::delta_casters(&s).len(), 2);
+        assert_eq!(super::super::photon::emit::delta_casters(&s.scene).len(), 2);
         // Without the blend's glass side, one caster is left.
-        s.objects.remove(1);
+        s.scene.objects.remove(1);
         assert_eq!(casters(&s), 1);
         // Only the hole and the rough metal: no caster, no pass.
-        s.objects.remove(1);
-        assert_eq!(RenderPlan::new(&s).photons, PhotonPlan::NoSpecularCaster);
+        s.scene.objects.remove(1);
+        assert_eq!(plan_of(&s).photons, PhotonPlan::NoSpecularCaster);
     }
 }

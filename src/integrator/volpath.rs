@@ -64,6 +64,8 @@ pub struct VolumePathTracer<'a> {
     accel: &'a dyn Accel,
     lights: LightSampler,
     max_depth: u32,
+    /// Emitters seen directly from the camera are black.
+    hide_emitters: bool,
     /// The scene's media, ready for sampling (same indices).
     media: Vec<Homogeneous>,
     /// Per medium: its scattering vertices sample a light.
@@ -91,6 +93,7 @@ impl<'a> VolumePathTracer<'a> {
             accel,
             lights: LightSampler::new(scene),
             max_depth: plan.max_depth,
+            hide_emitters: plan.hide_emitters,
             media: scene.media.list.iter().map(Homogeneous::of_medium).collect(),
             sample_emitters: scene.media.list.iter().map(|m| m.sample_emitters).collect(),
             volumetric: scene.media.pass_through == PassThrough::Volumetric,
@@ -182,7 +185,7 @@ impl<'a> VolumePathTracer<'a> {
             let emitter = self.lights.nearest_hit(&ray, t_hit);
             // Emitters the camera sees directly (through null surfaces too,
             // which are not bounces), when the scene hides them.
-            let hidden = depth == 0 && self.scene.settings.hide_emitters;
+            let hidden = depth == 0 && self.hide_emitters;
 
             if let Some(m) = medium {
                 let h = &self.media[m as usize];

@@ -168,7 +168,7 @@ impl<'a> Whitted<'a> {
             })
             .collect();
         let medium = match plan.fog {
-            FogPlan::Run { .. } => scene.settings.medium.as_ref(),
+            FogPlan::Run { .. } => scene.water_medium.as_ref(),
             FogPlan::NoMedium | FogPlan::PathTraced => None,
         };
         Self {
@@ -234,7 +234,7 @@ impl<'a> Whitted<'a> {
             }
         }
         // Emitters the camera sees directly, when the scene hides them.
-        let hidden = depth == 0 && self.scene.settings.hide_emitters;
+        let hidden = depth == 0 && self.plan.hide_emitters;
         let l = match (emitted, hit) {
             (Some(_), _) if hidden => Vec3A::ZERO,
             (Some(l), _) => l,
@@ -256,7 +256,7 @@ impl<'a> Whitted<'a> {
         let si = self.scene.surface_interaction(ray, hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
         // An emitting surface seen from a side it emits from.
-        let hidden = depth == 0 && self.scene.settings.hide_emitters;
+        let hidden = depth == 0 && self.plan.hide_emitters;
         let emitted = if m.emits_toward(ray.dir, si.ng) && !hidden {
             m.emission
         } else {
@@ -332,7 +332,7 @@ impl<'a> Whitted<'a> {
         let mut out = if !has_ambient || !self.plan.ambient {
             Vec3A::ZERO
         } else {
-            self.scene.settings.ambient * m.ambient
+            self.scene.ambient * m.ambient
         };
         let frame = match local {
             Local::Bsdf(b) => b.frame(ns, si.dpdu),

@@ -33,7 +33,7 @@ use crate::integrator::lint;
 use crate::integrator::photon::TracedPhotons;
 use crate::integrator::{self, debug, RenderOutput, RenderPlan};
 use crate::math::SamplerKind;
-use crate::scene::{self, IntegratorKind, Scene, SceneError};
+use crate::scene::{self, IntegratorKind, LoadedScene, RenderSettings, Scene, SceneError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -163,13 +163,16 @@ impl Overrides {
         Ok(())
     }
 
-    /// Applies the overrides to `scene` (loaded from `source`), refusing
-    /// values beyond the limits with the file named in the message.
-    pub fn apply(&self, scene: &mut Scene, source: &Path) -> Result<(), JobError> {
+    /// Applies the overrides to `loaded` (read from `source`): the one
+    /// place where the command line's values replace the file's settings
+    /// (and its environment light), refusing values beyond the limits with
+    /// the file named in the message.
+    pub fn apply(&self, loaded: &mut LoadedScene, source: &Path) -> Result<(), JobError> {
+        let LoadedScene { scene, settings } = loaded;
         self.apply_environment(scene, source)?;
         // Media and null surfaces are the path integrator's alone.
         let volumetric = scene.is_volumetric();
-        let s = &mut scene.settings;
+        let s = settings;
         s.width = self.width.unwrap_or(s.width);
         s.height = self.height.unwrap_or(s.height);
         s.spp = self.spp.unwrap_or(s.spp);
@@ -383,6 +386,8 @@ impl JobError {
 pub struct RenderJob {
     /// The scene, with the overrides applied.
     pub scene: Scene,
+    /// The render settings, with the overrides applied.
+    pub settings: RenderSettings,
     /// Where the scene came from (for messages).
     pub source: PathBuf,
     /// Accelerator.
@@ -498,7 +503,7 @@ impl RenderJob {
     /// Loads and checks everything a render needs; nothing is rendered and no
     /// file is written.
     pub fn prepare(request: &RenderRequest) -> Result<Self, JobError> {
-        let mut scene = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
+        let mut loaded = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
         let resumed = match &request.resume {
             Some(path) => Some(film::read_checkpoint(path)?),
             None => None,
@@ -518,9 +523,10 @@ impl RenderJob {
                 accel = AccelKind::from_name(&m.accel);
             }
         }
-        overrides.apply(&mut scene, &request.scene)?;
-        let shard = shard_of(request, resumed.as_ref().map(|c| &c.meta), &scene)?;
-        if scene.settings.denoise {
+        overrides.apply(&mut loaded, &request.scene)?;
+        let LoadedScene { scene, settings } = loaded;
+        let shard = shard_of(request, resumed.as_ref().map(|c| &c.meta), &settings)?;
+        if settings.denoise {
             denoise::require()?;
             if shard.is_some() {
                 return Err(JobError::Invalid(
@@ -532,12 +538,12 @@ impl RenderJob {
         }
         let accel = accel.unwrap_or_else(AccelKind::default_kind);
         let accel_options = AccelOptions {
-            triangle_test: scene.settings.triangle_test,
+            triangle_test: settings.triangle_test,
             embree_quality: request.embree_quality.clone(),
             embree_robust: request.embree_robust,
         };
         let checkpoint_path = request.checkpoint.clone().or_else(|| request.resume.clone());
-        let mut meta = checkpoint_meta(&scene, accel, &accel_options);
+        let mut meta = checkpoint_meta(&scene, &settings, accel, &accel_options);
         meta.shard = shard.clone();
         if shard.is_some() && checkpoint_path.is_none() {
             return Err(JobError::Invalid(
@@ -559,7 +565,7 @@ impl RenderJob {
                 )));
             }
         }
-        if request.photon_map.is_some() && scene.settings.photons.progressive {
+        if request.photon_map.is_some() && settings.photons.progressive {
             return Err(JobError::Invalid(format!(
                 "--photon-map: {} renders with progressive photon mapping ([photons] progressive = true or \
                  --progressive-photons), which traces a new map for every sample index; it cannot use a photon \
@@ -568,14 +574,14 @@ impl RenderJob {
             )));
         }
         let photons = match &request.photon_map {
-            Some(path) => Some(photons::load_for(path, &scene, accel, &accel_options)?),
+            Some(path) => Some(photons::load_for(path, &scene, &settings, accel, &accel_options)?),
             None => None,
         };
         // Fail before hours of rendering, not after.
         for out in request.png.iter().chain(&request.exr).chain(&checkpoint_path) {
             film::check_writable(out)?;
         }
-        let (w, h, spp) = (scene.settings.width, scene.settings.height, scene.settings.spp);
+        let (w, h, spp) = (settings.width, settings.height, settings.spp);
         let (mut start, retrace_aovs) = match resumed {
             Some(c) => (c.accumulation, !c.has_aovs),
             None => (Accumulation::new(w, h), false),
@@ -599,14 +605,17 @@ impl RenderJob {
             shard,
             photons,
             scene,
+            settings,
         })
     }
 
     /// A job over a scene built in memory: no files, no checkpoint.
-    pub fn in_memory(scene: Scene, accel: AccelKind, accel_options: AccelOptions) -> Self {
-        let start = Accumulation::new(scene.settings.width, scene.settings.height);
+    pub fn in_memory(loaded: LoadedScene, accel: AccelKind, accel_options: AccelOptions) -> Self {
+        let LoadedScene { scene, settings } = loaded;
+        let start = Accumulation::new(settings.width, settings.height);
         Self {
             scene,
+            settings,
             source: PathBuf::from("<memory>"),
             accel,
             accel_options,
@@ -626,7 +635,7 @@ impl RenderJob {
 
     /// The render plan of this job.
     pub fn plan(&self) -> RenderPlan {
-        let mut plan = RenderPlan::new(&self.scene);
+        let mut plan = RenderPlan::new(&self.scene, &self.settings);
         plan.keep_photon_positions = matches!(self.debug, Some(DebugView::Photons));
         // Every EXR this job writes (output, checkpoint, partial) holds them.
         let every_buffer = self.exr.is_some() || self.checkpoint.is_some() || self.shard.is_some();
@@ -652,7 +661,7 @@ impl RenderJob {
     pub fn run_with(self, accel: &dyn Accel, hooks: &JobHooks) -> Result<JobReport, JobError> {
         let stats = accel.stats();
         let plan = self.plan();
-        let st = &self.scene.settings;
+        let st = &self.settings;
         let shard = self.shard.clone();
         let total_samples = match &shard {
             Some(set) => set.total_samples(st.width, st.height, st.spp),
@@ -660,7 +669,7 @@ impl RenderJob {
         };
         // Samples mode starts every pixel at its range's first index.
         let offset = sample_offset(shard.as_ref(), &plan);
-        let warnings = lint::warnings(&self.scene);
+        let warnings = lint::warnings(&self.scene, &self.settings);
         (hooks.started)(&JobStart {
             accel: &stats,
             plan: &plan,
@@ -837,7 +846,7 @@ fn sample_offset(shard: Option<&ShardSet>, plan: &RenderPlan) -> u64 {
 fn shard_of(
     request: &RenderRequest,
     resumed: Option<&CheckpointMeta>,
-    scene: &Scene,
+    settings: &RenderSettings,
 ) -> Result<Option<ShardSet>, JobError> {
     let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
     let shard = match (resumed.map(|m| &m.shard), &request.shard) {
@@ -866,7 +875,7 @@ fn shard_of(
         }
     };
     let Some(set) = shard else { return Ok(None) };
-    let st = &scene.settings;
+    let st = settings;
     if st.noise_threshold.is_some() {
         return Err(JobError::Invalid(format!(
             "{}: adaptive sampling (--noise-threshold or the scene's noise_threshold) cannot be split into shards: \
@@ -889,8 +898,13 @@ fn shard_of(
 }
 
 /// What a checkpoint of this render records (its fingerprint included).
-pub fn checkpoint_meta(scene: &Scene, accel: AccelKind, options: &AccelOptions) -> CheckpointMeta {
-    let st = &scene.settings;
+pub fn checkpoint_meta(
+    scene: &Scene,
+    settings: &RenderSettings,
+    accel: AccelKind,
+    options: &AccelOptions,
+) -> CheckpointMeta {
+    let st = settings;
     CheckpointMeta {
         width: st.width,
         height: st.height,
@@ -898,7 +912,7 @@ pub fn checkpoint_meta(scene: &Scene, accel: AccelKind, options: &AccelOptions) 
         seed: st.seed,
         photons: st.photons.count,
         accel: accel.name().to_string(),
-        fingerprint: fingerprint(scene, accel, &options.fingerprint_text(accel)),
+        fingerprint: fingerprint(scene, settings, accel, &options.fingerprint_text(accel)),
         fingerprint_format: fingerprint::FINGERPRINT_FORMAT,
         output: st.output,
         shard: None,

@@ -8,7 +8,7 @@ use crate::accel::{self, AccelKind, AccelOptions};
 use crate::film;
 use crate::integrator::photon::{read_photons, trace_photons, write_photons, PhotonRules, TracedPhotons};
 use crate::integrator::{planned_photons, RenderPlan};
-use crate::scene::{self, Scene};
+use crate::scene::{self, LoadedScene, RenderSettings, Scene};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -49,21 +49,22 @@ pub struct PhotonsReport {
 /// Traces the photons of `request`'s scene (on the current rayon pool) and
 /// writes them to its output atomically.
 pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError> {
-    let mut scene = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
-    request.overrides.apply(&mut scene, &request.scene)?;
+    let mut loaded = scene::load_scene_options(&request.scene, &request.overrides.load_options())?;
+    request.overrides.apply(&mut loaded, &request.scene)?;
+    let LoadedScene { scene, settings } = loaded;
     let accel_kind = request.accel.unwrap_or_else(AccelKind::default_kind);
     let options = AccelOptions {
-        triangle_test: scene.settings.triangle_test,
+        triangle_test: settings.triangle_test,
         ..request.accel_options.clone()
     };
-    if RenderPlan::new(&scene).progressive().is_some() {
+    let plan = RenderPlan::new(&scene, &settings);
+    if plan.progressive().is_some() {
         return Err(JobError::Invalid(format!(
             "{}: progressive photon mapping ([photons] progressive = true) traces a new map for every sample \
              index during the render: there is no one map to save",
             request.scene.display()
         )));
     }
-    let plan = RenderPlan::new(&scene);
     if plan.photon_rules == PhotonRules::Physical {
         return Err(JobError::Invalid(format!(
             "{}: photon files hold the Whitted integrator's caustic map; the path integrator's maps \
@@ -80,8 +81,8 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
     };
     film::check_writable(&request.output)?;
     let accel = accel::build(&scene, accel_kind, &options)?;
-    let traced = trace_photons(&scene, accel.as_ref(), count, true);
-    let fingerprint = photon_fingerprint(&scene, accel_kind, &options.fingerprint_text(accel_kind));
+    let traced = trace_photons(&scene, plan.photon_trace, accel.as_ref(), count, true);
+    let fingerprint = photon_fingerprint(&scene, &settings, accel_kind, &options.fingerprint_text(accel_kind));
     let begin = Instant::now();
     write_photons(&request.output, &traced, &fingerprint)?;
     let bytes = std::fs::metadata(&request.output).map(|m| m.len()).unwrap_or(0);
@@ -101,17 +102,18 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
 pub fn load_for(
     path: &Path,
     scene: &Scene,
+    settings: &RenderSettings,
     accel: AccelKind,
     options: &AccelOptions,
 ) -> Result<TracedPhotons, JobError> {
-    if RenderPlan::new(scene).progressive().is_some() {
+    let plan = RenderPlan::new(scene, settings);
+    if plan.progressive().is_some() {
         return Err(JobError::Invalid(format!(
             "--photon-map {}: progressive photon mapping ([photons] progressive = true, or \
              --progressive-photons) traces a new map for every sample index; it cannot use a photon file",
             path.display()
         )));
     }
-    let plan = RenderPlan::new(scene);
     if plan.photon_rules == PhotonRules::Physical {
         return Err(JobError::Invalid(format!(
             "--photon-map {}: photon files hold the Whitted integrator's caustic map; the path \
@@ -127,13 +129,15 @@ pub fn load_for(
         )));
     };
     let (traced, fingerprint) = read_photons(path).map_err(|e| JobError::Invalid(e.to_string()))?;
-    if fingerprint != photon_fingerprint(scene, accel, &options.fingerprint_text(accel)) || traced.emitted != planned {
+    if fingerprint != photon_fingerprint(scene, settings, accel, &options.fingerprint_text(accel))
+        || traced.emitted != planned
+    {
         return Err(JobError::Invalid(format!(
             "{}: photons of another scene or other settings ({} photons in the file, {} here; or the seed, \
              the scene, a mesh or the accelerator differ); trace them again with caustic photons",
             path.display(),
             traced.emitted,
-            scene.settings.photons.count
+            settings.photons.count
         )));
     }
     Ok(traced)

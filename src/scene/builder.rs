@@ -11,8 +11,9 @@
 //! the same to it.
 
 use crate::geometry::Mesh;
+use crate::math::Vec3A;
 use crate::scene::load::{Place, SceneError};
-use crate::scene::{Camera, Light, Material, Media, Object, RenderSettings, Scene, Shape};
+use crate::scene::{Camera, Light, LoadedScene, Material, Media, Object, RenderSettings, Scene, Shape};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -81,6 +82,7 @@ impl fmt::Display for Origin {
 pub struct SceneBuilder {
     file: Origin,
     settings: RenderSettings,
+    ambient: Vec3A,
     camera: Option<Camera>,
     materials: Vec<(Material, Origin)>,
     meshes: Vec<Arc<Mesh>>,
@@ -96,6 +98,7 @@ impl SceneBuilder {
         SceneBuilder {
             file: Origin::File { path: file.into() },
             settings: RenderSettings::default(),
+            ambient: Vec3A::ZERO,
             camera: None,
             materials: Vec::new(),
             meshes: Vec::new(),
@@ -108,6 +111,11 @@ impl SceneBuilder {
     /// The render settings the file asks for.
     pub fn set_settings(&mut self, settings: RenderSettings) {
         self.settings = settings;
+    }
+
+    /// The ambient light (the Whitted integrator's term).
+    pub fn set_ambient(&mut self, ambient: Vec3A) {
+        self.ambient = ambient;
     }
 
     /// The camera.
@@ -144,7 +152,7 @@ impl SceneBuilder {
 
     /// The scene, once every part refers to parts that exist and what a
     /// material needs from a shape is there. Errors name the part's origin.
-    pub fn build(self) -> Result<Scene, SceneError> {
+    pub fn build(self) -> Result<LoadedScene, SceneError> {
         let Some(camera) = self.camera.clone() else {
             return Err(self.file.error("the scene has no camera"));
         };
@@ -170,15 +178,19 @@ impl SceneBuilder {
         }
         self.check_media()?;
         let scene = Scene {
-            settings: self.settings,
             camera,
             materials: self.materials.into_iter().map(|(m, _)| m).collect(),
             lights: self.lights.into_iter().map(|(l, _)| l).collect(),
             meshes: self.meshes,
             objects: self.objects.into_iter().map(|(o, _)| o).collect(),
             media: self.media,
+            ambient: self.ambient,
+            water_medium: None,
         };
-        Ok(scene)
+        Ok(LoadedScene {
+            scene,
+            settings: self.settings,
+        })
     }
 
     /// Every interface names a medium that exists, and there is one
@@ -278,8 +290,8 @@ mod tests {
         let mesh = b.add_mesh(square(true));
         b.add_object(mesh_object(mesh, m), text(2));
         let scene = b.build().unwrap();
-        assert_eq!(scene.objects.len(), 1);
-        assert_eq!(scene.materials[0].name, "white");
+        assert_eq!(scene.scene.objects.len(), 1);
+        assert_eq!(scene.scene.materials[0].name, "white");
     }
 
     #[test]

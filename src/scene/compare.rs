@@ -8,18 +8,27 @@
 //! mesh by its content), its material (images by their texels), the
 //! media on its sides; then the settings, the camera and the lights.
 
-use super::{HomogeneousMedium, Material, Scene, Shape};
+use super::{HomogeneousMedium, LoadedScene, Material, Scene, Shape};
 use crate::texture::Texture;
 use std::sync::Arc;
 
 /// The first part where `a` and `b` differ, described; `None` when they
 /// are the same scene.
-pub fn first_difference(a: &Scene, b: &Scene) -> Option<String> {
+pub fn first_difference(a: &LoadedScene, b: &LoadedScene) -> Option<String> {
+    if a.settings != b.settings {
+        return Some(format!("render settings: {:?} against {:?}", a.settings, b.settings));
+    }
+    scene_difference(&a.scene, &b.scene)
+}
+
+/// The first part where the scenes `a` and `b` differ (settings aside).
+fn scene_difference(a: &Scene, b: &Scene) -> Option<String> {
     fn differ<T: PartialEq + std::fmt::Debug>(what: &str, x: &T, y: &T) -> Option<String> {
         (x != y).then(|| format!("{what}: {x:?} against {y:?}"))
     }
     let mut checks = vec![
-        differ("render settings", &a.settings, &b.settings),
+        differ("ambient light", &a.ambient, &b.ambient),
+        differ("water medium", &a.water_medium, &b.water_medium),
         differ("camera", &a.camera, &b.camera),
         differ("lights", &a.lights, &b.lights),
         differ("object count", &a.objects.len(), &b.objects.len()),

@@ -88,7 +88,7 @@ impl ViewerApp {
         accel_options: AccelOptions,
         wake: impl Fn() + Send + 'static,
     ) -> Self {
-        let output = edit.scene.settings.output;
+        let output = edit.settings.output;
         let (image_path, scene_path) = default_paths(&edit.path);
         let open_path = edit.path.display().to_string();
         let mut core = ViewerCore::new(edit, size, accel, wake);
@@ -151,7 +151,7 @@ impl ViewerApp {
                 (self.image_path, self.scene_path) = default_paths(&edit.path);
                 self.message = format!("opened {}", edit.path.display());
                 ctx.send_viewport_cmd(egui::ViewportCommand::Title(window_title(&edit.path)));
-                self.display.output = edit.scene.settings.output;
+                self.display.output = edit.settings.output;
                 self.core.replace_scene(edit);
                 self.layer = None;
                 self.loading = None;
@@ -265,7 +265,7 @@ impl ViewerApp {
     }
 
     fn render_settings(&mut self, ui: &mut egui::Ui) {
-        let s = &mut self.core.edit.scene.settings;
+        let s = &mut self.core.edit.settings;
         egui::ComboBox::from_label("integrator")
             .selected_text(match s.integrator {
                 IntegratorKind::Whitted => "Whitted",
@@ -618,7 +618,7 @@ fn default_paths(scene: &Path) -> (String, String) {
 pub fn run(options: ViewOptions) -> Result<(), String> {
     let mut edit = EditableScene::open_with(&options.scene, &options.load).map_err(|e| e.to_string())?;
     if let Some(n) = options.spp {
-        edit.scene.settings.spp = n.max(1);
+        edit.settings.spp = n.max(1);
     }
     let (w, h) = options.size;
     let title = window_title(&options.scene);

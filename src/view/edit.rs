@@ -9,7 +9,9 @@ use super::orbit::Orbit;
 use crate::film::output::write_atomically;
 use crate::film::OutputError;
 use crate::math::Vec3A;
-use crate::scene::{self, IntegratorKind, Light, Material, Projection, Scene, SceneError, ShadingModel};
+use crate::scene::{
+    self, IntegratorKind, Light, LoadedScene, Material, Projection, RenderSettings, Scene, SceneError, ShadingModel,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
@@ -38,6 +40,8 @@ pub struct EditableScene {
     pub path: PathBuf,
     /// The scene with every edit applied (what the next pass renders).
     pub scene: Scene,
+    /// The render settings, edited in the panel.
+    pub settings: RenderSettings,
     /// The camera.
     pub orbit: Orbit,
     /// The camera of the file, for "reset camera".
@@ -142,9 +146,9 @@ impl EditableScene {
     /// model's camera).
     pub fn open_with(path: &Path, options: &scene::LoadOptions) -> Result<Self, SceneError> {
         // The loader checks size, encoding and every value first.
-        let scene = scene::load_scene_options(path, options)?;
+        let loaded = scene::load_scene_options(path, options)?;
         if !scene::is_toml_path(path) {
-            return Ok(Self::from_parts(path, scene, None));
+            return Ok(Self::from_parts(path, loaded, None));
         }
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
             path: path.to_path_buf(),
@@ -155,14 +159,15 @@ impl EditableScene {
             place: None,
             message: e.message().to_string(),
         })?;
-        Ok(Self::from_parts(path, scene, Some(doc)))
+        Ok(Self::from_parts(path, loaded, Some(doc)))
     }
 
-    fn from_parts(path: &Path, scene: Scene, doc: Option<DocumentMut>) -> Self {
+    fn from_parts(path: &Path, loaded: LoadedScene, doc: Option<DocumentMut>) -> Self {
+        let LoadedScene { scene, settings } = loaded;
         let cam = &scene.camera;
         let scene_projection = cam.projection;
         let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
-        let s = &scene.settings;
+        let s = &settings;
         let aspect = s.width as f32 / s.height as f32;
         // An orthographic camera orbits a target placed where a 40° frustum
         // spans its image height, unless the file names the point looked at.
@@ -219,6 +224,7 @@ impl EditableScene {
         Self {
             path: path.to_path_buf(),
             scene,
+            settings,
             orbit,
             initial_orbit: orbit,
             orthographic: match scene_projection {
@@ -297,6 +303,14 @@ impl EditableScene {
         }
     }
 
+    /// The scene and its settings as edited (what the next pass renders).
+    pub fn snapshot(&self) -> LoadedScene {
+        LoadedScene {
+            scene: self.scene.clone(),
+            settings: self.settings.clone(),
+        }
+    }
+
     /// The scene file's text with every edit written in (`None` for a
     /// scene read from another format).
     pub fn to_toml(&self) -> Option<String> {
@@ -341,7 +355,7 @@ impl EditableScene {
 
     fn write_edits(&self, doc: &mut DocumentMut) {
         let root = doc.as_table_mut();
-        let s = &self.scene.settings;
+        let s = &self.settings;
         {
             let render = table_mut(root, "render");
             set(render, "spp", value(s.spp as i64));
@@ -383,7 +397,7 @@ impl EditableScene {
                 Ok(write_text(path, &doc.to_string())?)
             }
             None => {
-                crate::scene::write::write_toml_scene(&self.scene, path)?;
+                crate::scene::write::write_toml_scene(&self.snapshot(), path)?;
                 Ok(())
             }
         }
@@ -481,13 +495,14 @@ fn write_material(t: &mut dyn TableLike, m: &Material) {
 /// specular material (a caster or a surface photons pass through) are the
 /// same, and no material changed between diffuse and specular. Camera
 /// moves and edits of diffuse materials keep the map.
-pub fn same_photons(a: &Scene, b: &Scene) -> bool {
+pub fn same_photons(a: &LoadedScene, b: &LoadedScene) -> bool {
     let (sa, sb) = (&a.settings, &b.settings);
+    let (a, b) = (&a.scene, &b.scene);
     a.lights == b.lights
         && sa.photons == sb.photons
         && sa.max_depth == sb.max_depth
         && sa.seed == sb.seed
-        && sa.medium == sb.medium
+        && a.water_medium == b.water_medium
         && sa.integrator == sb.integrator
         && (sa.width, sa.height) == (sb.width, sb.height)
         && a.objects == b.objects
@@ -579,8 +594,8 @@ material = "white"
         let out = dir.path().join("room.toml");
         e.save(&out).unwrap();
         let again = scene::load_scene(&out).unwrap();
-        assert_eq!(crate::scene::compare::first_difference(&again, &e.scene), None);
-        assert_ne!(again.lights, before, "the edit is saved");
+        assert_eq!(crate::scene::compare::first_difference(&again, &e.snapshot()), None);
+        assert_ne!(again.scene.lights, before, "the edit is saved");
         assert!(matches!(e.save_camera(), Err(SaveError::NotToml(_))));
     }
 
@@ -595,9 +610,9 @@ material = "white"
         let text = std::fs::read_to_string(&out).unwrap();
         assert!(text.contains("# a comment that survives saving"));
         let again = scene::load_scene(&out).unwrap();
-        assert_eq!(again.lights, e.scene.lights);
-        assert_eq!(again.materials, e.scene.materials);
-        assert!((again.camera.position - e.scene.camera.position).length() < 1e-5);
+        assert_eq!(again.scene.lights, e.scene.lights);
+        assert_eq!(again.scene.materials, e.scene.materials);
+        assert!((again.scene.camera.position - e.scene.camera.position).length() < 1e-5);
     }
 
     #[test]
@@ -609,17 +624,17 @@ material = "white"
         e.orbit.rotate(50.0, 10.0, 100.0);
         e.scene.materials[1].diffuse = Vec3A::new(0.1, 0.2, 0.3);
         e.scene.materials[0].dielectric.as_mut().unwrap().ior = 1.33;
-        e.scene.settings.spp = 9;
-        e.scene.settings.photons.count = 1234;
+        e.settings.spp = 9;
+        e.settings.photons.count = 1234;
         e.apply();
         let out = dir.path().join("edited.toml");
         e.save(&out).unwrap();
         let again = scene::load_scene(&out).unwrap();
-        assert_eq!(again.lights, e.scene.lights);
-        assert_eq!(again.materials, e.scene.materials);
+        assert_eq!(again.scene.lights, e.scene.lights);
+        assert_eq!(again.scene.materials, e.scene.materials);
         assert_eq!(again.settings.spp, 9);
         assert_eq!(again.settings.photons.count, 1234);
-        let (a, b) = (again.camera, e.scene.camera);
+        let (a, b) = (again.scene.camera, e.scene.camera);
         assert!((a.position - b.position).length() < 1e-5);
         assert!((a.forward - b.forward).length() < 1e-5);
     }
@@ -637,7 +652,7 @@ material = "white"
             .unwrap()
             .diffuse = Vec3A::splat(0.2);
         b.apply();
-        assert!(same_photons(&e.scene, &b.scene));
+        assert!(same_photons(&e.snapshot(), &b.snapshot()));
         let mut c = e.clone();
         c.scene
             .materials
@@ -648,10 +663,10 @@ material = "white"
             .as_mut()
             .unwrap()
             .ior = 1.2;
-        assert!(!same_photons(&e.scene, &c.scene));
+        assert!(!same_photons(&e.snapshot(), &c.snapshot()));
         let mut d = e.clone();
         d.lights[0].intensity = 1.0;
         d.apply();
-        assert!(!same_photons(&e.scene, &d.scene));
+        assert!(!same_photons(&e.snapshot(), &d.snapshot()));
     }
 }

@@ -20,7 +20,7 @@ pub use worker::{Frame, NodeBoxes, RenderWorker, ViewRequest, WorkerEvent};
 use crate::accel::{AccelKind, AccelOptions};
 use crate::film::Film;
 use crate::integrator::photon::PhotonMap;
-use crate::scene::Scene;
+use crate::scene::LoadedScene;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -66,7 +66,7 @@ pub struct ViewerCore {
     generation: u64,
     geometry: u64,
     photons: u64,
-    submitted: Option<(Arc<Scene>, AccelKind)>,
+    submitted: Option<(Arc<LoadedScene>, AccelKind)>,
     changed_at: Option<Instant>,
     kd_asked: Option<u32>,
 }
@@ -102,7 +102,7 @@ impl ViewerCore {
     }
 
     fn prepare_scene(&mut self) {
-        let s = &mut self.edit.scene.settings;
+        let s = &mut self.edit.settings;
         (s.width, s.height) = self.size;
         self.edit.apply();
     }
@@ -129,7 +129,7 @@ impl ViewerCore {
     }
 
     /// The scene the newest request renders.
-    pub fn submitted_scene(&self) -> Option<&Arc<Scene>> {
+    pub fn submitted_scene(&self) -> Option<&Arc<LoadedScene>> {
         self.submitted.as_ref().map(|(s, _)| s)
     }
 
@@ -138,22 +138,23 @@ impl ViewerCore {
     /// Returns whether it did.
     pub fn sync(&mut self) -> bool {
         self.prepare_scene();
+        let edited = self.edit.snapshot();
         let unchanged = self
             .submitted
             .as_ref()
-            .is_some_and(|(s, a)| *a == self.accel && scenes_equal(s, &self.edit.scene));
+            .is_some_and(|(s, a)| *a == self.accel && scenes_equal(s, &edited));
         if unchanged {
             return false;
         }
         let same_map = self
             .submitted
             .as_ref()
-            .is_some_and(|(s, a)| *a == self.accel && same_photons(s, &self.edit.scene));
+            .is_some_and(|(s, a)| *a == self.accel && same_photons(s, &edited));
         if !same_map {
             self.photons += 1;
         }
         self.generation += 1;
-        let scene = Arc::new(self.edit.scene.clone());
+        let scene = Arc::new(edited);
         self.submitted = Some((scene.clone(), self.accel));
         self.changed_at = Some(Instant::now());
         self.worker.submit(ViewRequest {
@@ -178,7 +179,7 @@ impl ViewerCore {
             // Any version of the current geometry will do: the last request's.
             let scene = match &self.submitted {
                 Some((s, _)) => s.clone(),
-                None => Arc::new(self.edit.scene.clone()),
+                None => Arc::new(self.edit.snapshot()),
             };
             self.worker.request_kd_boxes(self.geometry, scene, depth);
         }
@@ -295,8 +296,13 @@ impl ViewerCore {
 
 /// Scene equality as far as rendering goes (meshes are shared, compared by
 /// identity).
-fn scenes_equal(a: &Scene, b: &Scene) -> bool {
-    a.settings == b.settings
+fn scenes_equal(a: &LoadedScene, b: &LoadedScene) -> bool {
+    let settings_equal = a.settings == b.settings;
+    let (a, b) = (&a.scene, &b.scene);
+    settings_equal
+        && a.ambient == b.ambient
+        && a.water_medium == b.water_medium
+        && a.media == b.media
         && a.camera == b.camera
         && a.materials == b.materials
         && a.lights == b.lights

@@ -22,7 +22,7 @@ use crate::integrator::photon::PhotonMap;
 use crate::integrator::plan::PhotonPlan;
 use crate::integrator::{self, RenderControl, RenderPlan};
 use crate::math::Aabb;
-use crate::scene::{Light, Scene};
+use crate::scene::{Light, LoadedScene, Scene};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -38,8 +38,8 @@ pub const PREVIEW_DIVISOR: u32 = 4;
 pub struct ViewRequest {
     /// Increases with every change; frames carry it.
     pub generation: u64,
-    /// The scene at its final settings (the viewer's image size).
-    pub scene: Arc<Scene>,
+    /// The scene and its final settings (the viewer's image size).
+    pub scene: Arc<LoadedScene>,
     /// Accelerator.
     pub accel: AccelKind,
     /// How it is built.
@@ -127,7 +127,7 @@ enum Command {
     Render(Box<ViewRequest>, Instant),
     KdBoxes {
         geometry: u64,
-        scene: Arc<Scene>,
+        scene: Arc<LoadedScene>,
         depth: u32,
     },
     Denoise(Box<Frame>),
@@ -177,7 +177,7 @@ impl RenderWorker {
 
     /// Asks for the KD-tree boxes of `scene` down to `depth` (built on the
     /// render thread; answered with [`WorkerEvent::KdBoxes`]).
-    pub fn request_kd_boxes(&self, geometry: u64, scene: Arc<Scene>, depth: u32) {
+    pub fn request_kd_boxes(&self, geometry: u64, scene: Arc<LoadedScene>, depth: u32) {
         let _ = self.commands.send(Command::KdBoxes { geometry, scene, depth });
     }
 
@@ -245,12 +245,12 @@ fn next_target(level: u32, spp: u32) -> u32 {
 
 /// The cheap first pass's scene: smaller image, one shadow ray per area
 /// light (the photon gather is left out by the caller).
-fn preview_scene(scene: &Scene) -> Scene {
-    let mut s = scene.clone();
-    s.settings.width = (scene.settings.width / PREVIEW_DIVISOR).max(1);
-    s.settings.height = (scene.settings.height / PREVIEW_DIVISOR).max(1);
+fn preview_scene(loaded: &LoadedScene) -> LoadedScene {
+    let mut s = loaded.clone();
+    s.settings.width = (loaded.settings.width / PREVIEW_DIVISOR).max(1);
+    s.settings.height = (loaded.settings.height / PREVIEW_DIVISOR).max(1);
     s.settings.noise_threshold = None;
-    for light in &mut s.lights {
+    for light in &mut s.scene.lights {
         if let Light::Area(a) = light {
             a.samples = 1;
         }
@@ -288,7 +288,7 @@ impl WorkerState {
         let mut denoise = None;
         while let Some(c) = self.queue.pop_front() {
             match c {
-                Command::KdBoxes { geometry, scene, depth } => self.kd_boxes(geometry, &scene, depth, send),
+                Command::KdBoxes { geometry, scene, depth } => self.kd_boxes(geometry, &scene.scene, depth, send),
                 Command::Denoise(frame) => denoise = Some(frame),
                 other => rest.push_back(other),
             }
@@ -322,7 +322,7 @@ impl WorkerState {
         send: &dyn Fn(WorkerEvent),
     ) {
         let cancelled = || request.cancel.load(Ordering::Relaxed);
-        let scene = &*request.scene;
+        let LoadedScene { scene, settings } = &*request.scene;
         let key = (request.geometry, request.accel);
         if self.accel.as_ref().is_none_or(|(k, _)| *k != key) {
             self.accel = None;
@@ -344,17 +344,19 @@ impl WorkerState {
         let mut pass = 0;
         if request.preview && !cancelled() {
             let accel = &*self.accel.as_ref().expect("built above").1;
-            let preview = preview_scene(scene);
-            let mut plan = RenderPlan::new(&preview);
+            let preview = preview_scene(&request.scene);
+            let mut plan = RenderPlan::new(&preview.scene, &preview.settings);
             plan.photons = PhotonPlan::CountZero;
             let start = Accumulation::new(plan.width, plan.height);
-            if let Some((mut frame, _)) = run_pass(&preview, accel, &plan, None, start, 1, request, submitted, pass) {
+            if let Some((mut frame, _)) =
+                run_pass(&preview.scene, accel, &plan, None, start, 1, request, submitted, pass)
+            {
                 pass += 1;
                 (frame.accel_builds, frame.photon_passes) = (self.accel_builds, self.photon_passes);
                 send(WorkerEvent::Frame(frame));
             }
         }
-        let mut plan = RenderPlan::new(scene);
+        let mut plan = RenderPlan::new(scene, settings);
         plan.keep_photon_positions = true;
         // The denoise toggle may be switched on at any pass.
         plan.aovs = true;

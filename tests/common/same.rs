@@ -6,7 +6,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::{render, RenderPlan};
-use caustic::scene::{HomogeneousMedium, Material, Scene, Shape};
+use caustic::scene::{HomogeneousMedium, LoadedScene, Material, Scene, Shape};
 use caustic::texture::Texture;
 use std::sync::Arc;
 
@@ -58,8 +58,11 @@ fn medium(scene: &Scene, i: Option<u32>, names: Names) -> Option<HomogeneousMedi
 }
 
 /// Panics with the first part where `a` and `b` differ.
-pub fn assert_same_scene(a: &Scene, b: &Scene, names: Names) {
+pub fn assert_same_scene(a: &LoadedScene, b: &LoadedScene, names: Names) {
     assert_eq!(a.settings, b.settings, "render settings");
+    let (a, b) = (&a.scene, &b.scene);
+    assert_eq!(a.ambient, b.ambient, "ambient light");
+    assert_eq!(a.water_medium, b.water_medium, "water medium");
     assert_eq!(a.camera, b.camera, "camera");
     assert_eq!(a.lights, b.lights, "lights");
     assert_eq!(a.objects.len(), b.objects.len(), "object count");
@@ -114,15 +117,16 @@ pub fn assert_same_scene(a: &Scene, b: &Scene, names: Names) {
 
 /// The linear pixels of a render of `scene` at `width × height` and `spp`
 /// (the scene's own seed and settings otherwise).
-pub fn render_small(scene: &Scene, width: u32, height: u32, spp: u32) -> Vec<[f32; 3]> {
-    let mut scene = scene.clone();
-    scene.settings.width = width;
-    scene.settings.height = height;
-    scene.settings.spp = spp;
-    scene.settings.noise_threshold = None;
-    scene.settings.photons.count = scene.settings.photons.count.min(20_000);
-    let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let plan = RenderPlan::new(&scene);
-    let out = render(&scene, accel.as_ref(), &plan, &|_, _| {});
+pub fn render_small(loaded: &LoadedScene, width: u32, height: u32, spp: u32) -> Vec<[f32; 3]> {
+    let scene = &loaded.scene;
+    let mut settings = loaded.settings.clone();
+    settings.width = width;
+    settings.height = height;
+    settings.spp = spp;
+    settings.noise_threshold = None;
+    settings.photons.count = settings.photons.count.min(20_000);
+    let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
+    let plan = RenderPlan::new(scene, &settings);
+    let out = render(scene, accel.as_ref(), &plan, &|_, _| {});
     out.film.pixels.iter().map(|p| p.to_array()).collect()
 }

@@ -6,7 +6,7 @@
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Ray, Transform, Vec3, Vec3A};
-use caustic::scene::{Camera, Material, Mesh, Object, Quad, RenderSettings, Scene, Shape, Sphere};
+use caustic::scene::{Camera, LoadedScene, Material, Mesh, Object, Quad, Scene, Shape, Sphere};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -18,7 +18,7 @@ pub fn path(relative: &str) -> PathBuf {
 }
 
 /// The scene file at `relative` (to the crate root), loaded.
-pub fn load(relative: &str) -> Scene {
+pub fn load(relative: &str) -> LoadedScene {
     let p = path(relative);
     caustic::scene::load_scene(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
@@ -146,7 +146,8 @@ pub fn test_scene() -> Scene {
     }
     Scene {
         media: Default::default(),
-        settings: RenderSettings::default(),
+        ambient: Vec3A::ZERO,
+        water_medium: None,
         camera: Camera::new(Vec3A::new(0.0, 1.0, 9.0), Vec3A::ZERO, Vec3A::Y, 45.0).unwrap(),
         materials: vec![Material::diffuse("grey", Vec3A::splat(0.5))],
         lights: vec![],

@@ -9,7 +9,7 @@ use crate::accel::{self, Accel, AccelKind, AccelOptions};
 use crate::analysis::rays::{self, RaySet};
 use crate::integrator::{self, RenderPlan};
 use crate::memory;
-use crate::scene::{self, Scene};
+use crate::scene::{self, LoadedScene, Scene};
 use std::path::{Path, PathBuf};
 
 /// Checks the options that do not depend on a scene.
@@ -71,8 +71,8 @@ pub fn run(scenes: &[PathBuf], options: &BenchOptions, progress: &dyn Fn(&str)) 
     let mut results = Vec::with_capacity(scenes.len());
     for path in scenes {
         progress(&format!("{}: loading", path.display()));
-        let scene = scene::load_scene_with(path, &options.defines)?;
-        results.push(bench_scene(path, &scene, options, progress)?);
+        let loaded = scene::load_scene_with(path, &options.defines)?;
+        results.push(bench_scene(path, &loaded, options, progress)?);
     }
     Ok(BenchReport {
         caustic_version: env!("CARGO_PKG_VERSION").into(),
@@ -94,18 +94,19 @@ fn baseline_index(accels: &[AccelKind]) -> usize {
 /// Benches one loaded scene (`path` names it in the report and in errors).
 pub fn bench_scene(
     path: &Path,
-    scene: &Scene,
+    loaded: &LoadedScene,
     options: &BenchOptions,
     progress: &dyn Fn(&str),
 ) -> Result<SceneBench, BenchError> {
+    let scene = &loaded.scene;
     check_options(options)?;
     check_ray_memory(path, scene, options.rays)?;
     let name = path.display().to_string();
 
     // The render's scene: the file's, at the bench's reduced settings.
-    let mut render_scene = scene.clone();
+    let mut render_settings = loaded.settings.clone();
     {
-        let s = &mut render_scene.settings;
+        let s = &mut render_settings;
         s.width = options.render.width;
         s.height = options.render.height;
         s.spp = options.render.spp;
@@ -115,17 +116,17 @@ pub fn bench_scene(
             .photons
             .unwrap_or_else(|| s.photons.count.min(DEFAULT_BENCH_PHOTONS));
     }
-    let plan = RenderPlan::new(&render_scene);
-    let render_settings = RenderSettingsInfo {
+    let plan = RenderPlan::new(scene, &render_settings);
+    let render_info = RenderSettingsInfo {
         width: plan.width,
         height: plan.height,
         spp: plan.spp,
-        photons: render_scene.settings.photons.count,
+        photons: render_settings.photons.count,
         photon_pass: matches!(plan.photons, integrator::plan::PhotonPlan::Run { .. }),
     };
 
     let accel_options = AccelOptions {
-        triangle_test: scene.settings.triangle_test,
+        triangle_test: loaded.settings.triangle_test,
         ..options.accel_options.clone()
     };
     // Baseline first: its camera hits seed the shadow rays.
@@ -179,7 +180,7 @@ pub fn bench_scene(
             plan.spp,
             kind.name()
         ));
-        let render = time_render(&render_scene, accel.as_ref(), &plan);
+        let render = time_render(scene, accel.as_ref(), &plan);
         accelerators.push(AccelBench {
             name: kind.name().into(),
             build_seconds: stats.build_time.as_secs_f64(),
@@ -211,7 +212,7 @@ pub fn bench_scene(
                 rays: s.rays.len(),
             })
             .collect(),
-        render_settings,
+        render_settings: render_info,
         accelerators,
         comparisons,
     })
@@ -265,10 +266,11 @@ mod tests {
     use crate::math::{Vec3, Vec3A};
     use crate::scene::{Camera, Light, Material, Object, Quad, RenderSettings, Shape, Sphere};
 
-    fn ball_scene() -> Scene {
-        Scene {
+    fn ball_scene() -> LoadedScene {
+        let scene = Scene {
             media: Default::default(),
-            settings: RenderSettings::default(),
+            ambient: Vec3A::ZERO,
+            water_medium: None,
             camera: Camera::new(Vec3A::new(0.0, 1.0, 5.0), Vec3A::new(0.0, 0.5, 0.0), Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("white", Vec3A::ONE)],
             lights: vec![Light::Point {
@@ -298,6 +300,10 @@ mod tests {
                     material: 0,
                 },
             ],
+        };
+        LoadedScene {
+            scene,
+            settings: RenderSettings::default(),
         }
     }
 

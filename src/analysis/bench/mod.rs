@@ -197,7 +197,7 @@ mod tests {
         let scenes = default_scenes();
         assert_eq!(scenes.len(), 2);
         assert!(scenes.iter().all(|p| p.exists()), "{scenes:?}");
-        let mesh_only = crate::scene::load_scene(&scenes[1]).unwrap();
+        let mesh_only = crate::scene::load_scene(&scenes[1]).unwrap().scene;
         assert!(mesh_only
             .objects
             .iter()

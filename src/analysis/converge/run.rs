@@ -11,7 +11,7 @@ use crate::film::Film;
 use crate::integrator::{render, RenderPlan};
 use crate::limits::{check_image_limits, check_photon_count, MAX_SPP};
 use crate::math::SamplerKind;
-use crate::scene::{GatherMode, Scene};
+use crate::scene::{GatherMode, LoadedScene, RenderSettings, Scene};
 use std::time::Instant;
 
 /// One curve: an accelerator, optionally a photon gather mode and a sampler
@@ -202,6 +202,7 @@ const WARM_UP_PHOTONS: u64 = 100_000;
 
 struct Renderer<'a> {
     scene: Scene,
+    settings: RenderSettings,
     reference: &'a Film,
     epsilon: f64,
     photons_per_spp: Option<u64>,
@@ -221,7 +222,7 @@ impl Renderer<'_> {
     /// Sets the scene to `curve`'s gather mode and sampler, `spp`,
     /// `photons` and the noise threshold (adaptive curves); its plan.
     fn configure(&mut self, curve: &CurveSpec, spp: u32, photons: u64, threshold: Option<f32>) -> RenderPlan {
-        let s = &mut self.scene.settings;
+        let s = &mut self.settings;
         s.spp = spp;
         s.photons.count = photons;
         if let Some(g) = curve.gather {
@@ -232,7 +233,7 @@ impl Renderer<'_> {
         }
         s.noise_threshold = threshold;
         s.min_spp = s.min_spp.min(spp).max(2);
-        let mut plan = RenderPlan::new(&self.scene);
+        let mut plan = RenderPlan::new(&self.scene, &self.settings);
         // Only the denoised curves pay for the auxiliary images.
         plan.aovs = curve.denoise;
         plan
@@ -245,7 +246,7 @@ impl Renderer<'_> {
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         if curve.denoise {
             // The first filter loads OIDN's device module.
-            let _ = denoised(&out, self.scene.settings.denoise_quality);
+            let _ = denoised(&out, self.settings.denoise_quality);
         }
     }
 
@@ -261,7 +262,7 @@ impl Renderer<'_> {
         let start = Instant::now();
         let out = render::render(&self.scene, accel, &plan, &|_, _| {});
         let film = match curve.denoise {
-            true => denoised(&out, self.scene.settings.denoise_quality)?,
+            true => denoised(&out, self.settings.denoise_quality)?,
             false => out.film.clone(),
         };
         let photon_seconds_of = |o: &render::RenderOutput| {
@@ -283,7 +284,7 @@ impl Renderer<'_> {
             let again = Instant::now();
             let repeat = render::render(&self.scene, accel, &plan, &|_, _| {});
             if curve.denoise {
-                denoised(&repeat, self.scene.settings.denoise_quality)?;
+                denoised(&repeat, self.settings.denoise_quality)?;
             }
             let s = again.elapsed().as_secs_f64();
             if s < seconds {
@@ -324,12 +325,12 @@ fn check_budget(width: u32, height: u32, spp: u32, photons: u64) -> Result<(), S
 /// `reference`, on the current rayon pool. `log` receives one line per
 /// render. Results are ordered by curve, then budget.
 pub fn run(
-    scene: &Scene,
+    loaded: &LoadedScene,
     reference: &Film,
     options: &ConvergeOptions,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Measurement>, ConvergeError> {
-    let st = &scene.settings;
+    let LoadedScene { scene, settings: st } = loaded;
     check_same_size((st.width, st.height), reference)?;
     if !(options.epsilon.is_finite() && options.epsilon > 0.0) {
         return Err(ConvergeError::Epsilon(options.epsilon));
@@ -350,10 +351,11 @@ pub fn run(
     }
     let mut renderer = Renderer {
         scene: scene.clone(),
+        settings: st.clone(),
         reference,
         epsilon: options.epsilon,
         photons_per_spp: options.photons_per_spp,
-        scene_photons: scene.settings.photons.count,
+        scene_photons: st.photons.count,
     };
     // Sample budgets are checked against the limits before anything renders.
     for b in &options.budgets {

@@ -133,17 +133,23 @@ pub struct CrosscheckOptions {
     pub rays: u64,
     /// Seed of the ray streams.
     pub seed: u64,
+    /// The image (width, height) whose pixels camera rays go through.
+    pub image: (u32, u32),
 }
 
 impl Default for CrosscheckOptions {
     fn default() -> Self {
-        Self { rays: 100_000, seed: 0 }
+        Self {
+            rays: 100_000,
+            seed: 0,
+            image: (640, 480),
+        }
     }
 }
 
 /// Casts `opts.rays` seeded rays through `a` and `b` and reports how they compare.
 pub fn crosscheck(scene: &Scene, a: &dyn Accel, b: &dyn Accel, opts: &CrosscheckOptions) -> CrosscheckReport {
-    let generator = RayGenerator::new(scene, opts.seed);
+    let generator = RayGenerator::new(scene, opts.seed, opts.image);
     let (a_name, b_name) = (a.stats().name, b.stats().name);
     let chunks = opts.rays.div_ceil(CHUNK);
     let parts: Vec<CrosscheckReport> = (0..chunks)
@@ -253,7 +259,7 @@ mod tests {
     use crate::accel::brute::BruteForce;
     use crate::accel::{AccelStats, Hit, TriangleTest};
     use crate::math::{Ray, Transform, Vec3, Vec3A};
-    use crate::scene::{AreaLight, Camera, Light, Material, Mesh, Object, Quad, RenderSettings, Shape, Sphere};
+    use crate::scene::{AreaLight, Camera, Light, Material, Mesh, Object, Quad, Shape, Sphere};
     use std::sync::Arc;
 
     /// A closed octahedron (instanced twice), a floor quad, a sphere, an area light.
@@ -323,11 +329,8 @@ mod tests {
         ];
         Scene {
             media: Default::default(),
-            settings: RenderSettings {
-                width: 64,
-                height: 48,
-                ..Default::default()
-            },
+            ambient: Vec3A::ZERO,
+            water_medium: None,
             camera: Camera::new(Vec3A::new(0.0, 1.0, 6.0), Vec3A::ZERO, Vec3A::Y, 50.0).unwrap(),
             materials: vec![Material::diffuse("grey", Vec3A::splat(0.5))],
             lights: vec![Light::Area(
@@ -389,7 +392,16 @@ mod tests {
     fn identical_accelerators_agree_on_every_ray() {
         let scene = small_scene();
         let (a, b) = (brute(&scene), brute(&scene));
-        let report = crosscheck(&scene, &a, &b, &CrosscheckOptions { rays: 8000, seed: 3 });
+        let report = crosscheck(
+            &scene,
+            &a,
+            &b,
+            &CrosscheckOptions {
+                rays: 8000,
+                seed: 3,
+                image: (64, 48),
+            },
+        );
         assert!(report.is_ok(), "{report}");
         let total = report.total();
         assert_eq!(total.rays, 8000);
@@ -419,7 +431,11 @@ mod tests {
             modulus: 7,
             shift_t: true,
         };
-        let opts = CrosscheckOptions { rays: 5000, seed: 11 };
+        let opts = CrosscheckOptions {
+            rays: 5000,
+            seed: 11,
+            image: (64, 48),
+        };
         let run = |threads: usize, b: &dyn Accel| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -440,7 +456,16 @@ mod tests {
             modulus: 5,
             shift_t: true,
         };
-        let report = crosscheck(&scene, &good, &wrong, &CrosscheckOptions { rays: 4000, seed: 1 });
+        let report = crosscheck(
+            &scene,
+            &good,
+            &wrong,
+            &CrosscheckOptions {
+                rays: 4000,
+                seed: 1,
+                image: (64, 48),
+            },
+        );
         assert!(!report.is_ok());
         assert!(report.total().disagreements > 100, "{report}");
         assert_eq!(report.disagreements.len(), MAX_REPORTED);
@@ -472,7 +497,16 @@ mod tests {
             modulus: 3,
             shift_t: false,
         };
-        let report = crosscheck(&scene, &wrong, &good, &CrosscheckOptions { rays: 4000, seed: 9 });
+        let report = crosscheck(
+            &scene,
+            &wrong,
+            &good,
+            &CrosscheckOptions {
+                rays: 4000,
+                seed: 9,
+                image: (64, 48),
+            },
+        );
         assert!(!report.is_ok(), "{report}");
         let d = &report.disagreements[0];
         let (a, b) = (d.a.unwrap(), d.b.unwrap());
@@ -497,7 +531,16 @@ mod tests {
         let scene = small_scene();
         let good = brute(&scene);
         let wrong = NeverOccluded(brute(&scene));
-        let report = crosscheck(&scene, &good, &wrong, &CrosscheckOptions { rays: 2000, seed: 4 });
+        let report = crosscheck(
+            &scene,
+            &good,
+            &wrong,
+            &CrosscheckOptions {
+                rays: 2000,
+                seed: 4,
+                image: (64, 48),
+            },
+        );
         let total = report.total();
         assert_eq!(total.disagreements, 0, "{report}");
         assert!(total.occlusion_disagreements > 200, "{report}");

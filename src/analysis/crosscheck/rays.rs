@@ -45,13 +45,15 @@ impl RayKind {
 pub(super) struct RayGenerator<'s> {
     pub(super) scene: &'s Scene,
     pub(super) seed: u64,
+    /// The image camera rays go through.
+    image: (u32, u32),
     bounds: Aabb,
     center: Vec3A,
     outer_radius: f32,
 }
 
 impl<'s> RayGenerator<'s> {
-    pub(super) fn new(scene: &'s Scene, seed: u64) -> Self {
+    pub(super) fn new(scene: &'s Scene, seed: u64, image: (u32, u32)) -> Self {
         let mut bounds = scene.bounds();
         if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
             bounds = Aabb::new(Vec3A::splat(-1.0), Vec3A::splat(1.0));
@@ -61,6 +63,7 @@ impl<'s> RayGenerator<'s> {
         Self {
             scene,
             seed,
+            image,
             bounds,
             center,
             outer_radius: 1.5 * half_diagonal,
@@ -83,8 +86,7 @@ impl<'s> RayGenerator<'s> {
     pub(super) fn ray(&self, kind: RayKind, rng: &mut Rng, a: &dyn Accel) -> (Ray, f32) {
         match kind {
             RayKind::Camera => {
-                let s = &self.scene.settings;
-                let (w, h) = (s.width.max(1), s.height.max(1));
+                let (w, h) = (self.image.0.max(1), self.image.1.max(1));
                 let ray = self.scene.camera.ray(rng.f32() * w as f32, rng.f32() * h as f32, w, h);
                 (ray, f32::INFINITY)
             }

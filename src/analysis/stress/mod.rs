@@ -40,7 +40,7 @@ pub mod watertight;
 use crate::accel::{self, Accel, AccelError, AccelKind, AccelOptions, TriangleTest};
 use crate::math::rng::{Domain, Rng};
 use crate::math::{Vec3, Vec3A};
-use crate::scene::{Camera, Material, Mesh, Object, RenderSettings, Scene, Shape};
+use crate::scene::{Camera, Material, Mesh, Object, Scene, Shape};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt;
@@ -401,7 +401,8 @@ pub fn scene_of(meshes: Vec<Arc<Mesh>>, objects: Vec<(Shape, u32)>, materials: V
     };
     Scene {
         media: Default::default(),
-        settings: RenderSettings::default(),
+        ambient: Vec3A::ZERO,
+        water_medium: None,
         camera: Camera::new(Vec3A::new(0.0, 0.0, 10.0), Vec3A::ZERO, Vec3A::Y, 45.0).expect("valid camera"),
         materials,
         lights: Vec::new(),

@@ -40,7 +40,7 @@ use crate::integrator::render::render;
 use crate::integrator::whitted::{SampleContext, Whitted};
 use crate::integrator::{RayCounts, RenderPlan};
 use crate::math::{offset_ray_origin, Ray, Rng, Transform, Vec3, Vec3A};
-use crate::scene::{Dielectric, Light, Material, Object, Scene, Shape, Sphere};
+use crate::scene::{Dielectric, Light, LoadedScene, Material, Object, RenderSettings, Scene, Shape, Sphere};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -148,7 +148,11 @@ fn chain(scene: &Scene, accel: &dyn Accel, mut ray: Ray) -> Tally {
 
 /// Whitted on a trapped ray: `(secondary rays, radiance finite)`.
 fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64) -> (u64, bool) {
-    let plan = RenderPlan::new(scene);
+    let settings = RenderSettings {
+        max_depth: Some(DEPTH_LIMIT),
+        ..RenderSettings::default()
+    };
+    let plan = RenderPlan::new(scene, &settings);
     let integrator = Whitted::new(scene, accel, &plan);
     let mut counts = RayCounts::default();
     let mut ctx = SampleContext {
@@ -194,7 +198,6 @@ fn chain_rows(options: &StressOptions) -> Vec<StressRow> {
     }
     let case = format!("7 Whitted depth limit (max_depth {DEPTH_LIMIT})");
     let mut scene = trap_scene(false);
-    scene.settings.max_depth = Some(DEPTH_LIMIT);
     scene.lights.push(Light::Point {
         position: Vec3A::new(0.0, 5.0, 3.0),
         intensity: Vec3A::splat(10.0),
@@ -231,10 +234,10 @@ fn chain_rows(options: &StressOptions) -> Vec<StressRow> {
 }
 
 /// `scenes/test/glass.toml`, sized for the stress run.
-pub fn glass_scene(width: u32) -> Result<Scene, String> {
+pub fn glass_scene(width: u32) -> Result<LoadedScene, String> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test/glass.toml");
-    let mut scene = crate::scene::load_scene(&path).map_err(|e| e.to_string())?;
-    let s = &mut scene.settings;
+    let mut loaded = crate::scene::load_scene(&path).map_err(|e| e.to_string())?;
+    let s = &mut loaded.settings;
     s.width = width.max(8);
     s.height = (width * 3 / 4).max(6);
     s.max_depth = Some(64);
@@ -243,7 +246,7 @@ pub fn glass_scene(width: u32) -> Result<Scene, String> {
     s.sharing = crate::scene::SampleSharing::Spread;
     s.spp = s.spp.max(2);
     s.photons.count = (width as u64 * width as u64 * 2).max(1000);
-    Ok(scene)
+    Ok(loaded)
 }
 
 /// Adds a smooth glass icosphere whose normals `corrupt` rewrites (past
@@ -333,17 +336,17 @@ fn injected(base: &Scene) -> Vec<(&'static str, Scene)> {
 /// dropped samples, samples)`.
 pub fn render_injected(name: &str, width: u32) -> Result<(u64, u64, u64), String> {
     let base = glass_scene(width)?;
-    let (_, scene) = injected(&base)
+    let (_, scene) = injected(&base.scene)
         .into_iter()
         .find(|(n, _)| *n == name)
         .ok_or_else(|| format!("no injected scene '{name}'"))?;
-    render_counts(&scene)
+    render_counts(&scene, &base.settings)
 }
 
 /// Renders `scene` with the default accelerator: `(non-finite film pixels, dropped, samples)`.
-fn render_counts(scene: &Scene) -> Result<(u64, u64, u64), String> {
+fn render_counts(scene: &Scene, settings: &RenderSettings) -> Result<(u64, u64, u64), String> {
     let accel = accel::build(scene, AccelKind::default_kind(), &AccelOptions::default()).map_err(|e| e.to_string())?;
-    let plan = RenderPlan::new(scene);
+    let plan = RenderPlan::new(scene, settings);
     let out = render(scene, accel.as_ref(), &plan, &|_, _| {});
     let bad = out.film.pixels.iter().filter(|p| !p.is_finite()).count() as u64;
     Ok((bad, out.stats.dropped_samples, out.stats.samples))
@@ -360,23 +363,26 @@ fn render_rows(options: &StressOptions) -> Vec<StressRow> {
         }
     };
     let mut rows = Vec::new();
-    let mut scenes = vec![("glass.toml (clean)", base.clone())];
-    scenes.extend(injected(&base));
+    let settings = &base.settings;
+    let mut scenes = vec![("glass.toml (clean)", base.scene.clone())];
+    scenes.extend(injected(&base.scene));
     for (k, (name, scene)) in scenes.iter().enumerate() {
         let case = format!("7 render glass.toml: {name}");
         let clean = k == 0;
-        rows.extend(guarded(&case, &config, Role::Default, || match render_counts(scene) {
-            Err(e) => vec![StressRow::new(&case, &config, Role::Default, 0, 1).note(e)],
-            Ok((bad, dropped, samples)) => {
-                let failures = bad + if clean { dropped } else { 0 };
-                let pixels = (scene.settings.width * scene.settings.height) as u64;
-                vec![
-                    StressRow::new(&case, &config, Role::Default, pixels, failures).note(format!(
-                        "non-finite pixels {bad}; dropped samples {} of {samples}{}",
-                        dropped,
-                        if clean { "" } else { " (counted, never on the film)" }
-                    )),
-                ]
+        rows.extend(guarded(&case, &config, Role::Default, || {
+            match render_counts(scene, settings) {
+                Err(e) => vec![StressRow::new(&case, &config, Role::Default, 0, 1).note(e)],
+                Ok((bad, dropped, samples)) => {
+                    let failures = bad + if clean { dropped } else { 0 };
+                    let pixels = (settings.width * settings.height) as u64;
+                    vec![
+                        StressRow::new(&case, &config, Role::Default, pixels, failures).note(format!(
+                            "non-finite pixels {bad}; dropped samples {} of {samples}{}",
+                            dropped,
+                            if clean { "" } else { " (counted, never on the film)" }
+                        )),
+                    ]
+                }
             }
         }));
     }

@@ -4,7 +4,7 @@
 use caustic::accel::{AccelKind, AccelOptions, TriangleTest};
 use caustic::film::ShardMode;
 use caustic::math::SamplerKind;
-use caustic::scene::{IntegratorKind, Scene};
+use caustic::scene::{IntegratorKind, RenderSettings};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
@@ -134,19 +134,19 @@ impl AccelArgs {
         self.accel.map(AccelKind::from).unwrap_or_else(AccelKind::default_kind)
     }
 
-    pub fn options(&self, scene: &Scene) -> AccelOptions {
-        self.backend.options(scene)
+    pub fn options(&self, settings: &RenderSettings) -> AccelOptions {
+        self.backend.options(settings)
     }
 
-    pub fn apply(&self, scene: &mut Scene) {
-        self.backend.apply(scene)
+    pub fn apply(&self, settings: &mut RenderSettings) {
+        self.backend.apply(settings)
     }
 }
 
 impl BackendArgs {
-    pub fn options(&self, scene: &Scene) -> AccelOptions {
+    pub fn options(&self, settings: &RenderSettings) -> AccelOptions {
         AccelOptions {
-            triangle_test: scene.settings.triangle_test,
+            triangle_test: settings.triangle_test,
             embree_quality: self.embree_quality.name().into(),
             embree_robust: self.embree_robust,
         }
@@ -159,9 +159,9 @@ impl BackendArgs {
         })
     }
 
-    pub fn apply(&self, scene: &mut Scene) {
+    pub fn apply(&self, settings: &mut RenderSettings) {
         if let Some(t) = self.triangle_test() {
-            scene.settings.triangle_test = t;
+            settings.triangle_test = t;
         }
     }
 }

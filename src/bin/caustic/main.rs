@@ -11,7 +11,7 @@ use args::{
     ViewArgs,
 };
 use caustic::job::JobError;
-use caustic::scene::{self, Scene};
+use caustic::scene::{self, LoadedScene};
 use clap::{Parser, Subcommand};
 use std::path::Path;
 use std::process::ExitCode;
@@ -111,7 +111,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn load(path: &Path, defines: &args::DefineArgs) -> Result<Scene, Failure> {
+fn load(path: &Path, defines: &args::DefineArgs) -> Result<LoadedScene, Failure> {
     scene::load_scene_with(path, &defines.defines).map_err(bad_input)
 }
 

@@ -9,26 +9,29 @@ use caustic::film;
 use caustic::integrator::RenderPlan;
 use caustic::job::Overrides;
 use caustic::math::SamplerKind;
-use caustic::scene::{self, IntegratorKind};
+use caustic::scene::{self, IntegratorKind, LoadedScene};
 use std::time::Instant;
 
 pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
     let mut load_times = None;
-    let mut scene = if scene::mitsuba::is_mitsuba_path(&args.scene) {
+    let LoadedScene { scene, mut settings } = if scene::mitsuba::is_mitsuba_path(&args.scene) {
         let loaded = scene::mitsuba::load_mitsuba_scene(&args.scene, &args.defines.defines).map_err(bad_input)?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
         load_times = Some((loaded.xml_seconds, loaded.mesh_seconds));
-        loaded.scene
+        LoadedScene {
+            scene: loaded.scene,
+            settings: loaded.settings,
+        }
     } else {
         load(&args.scene, &args.defines)?
     };
-    args.accel.apply(&mut scene);
+    args.accel.apply(&mut settings);
     if let Some(i) = args.integrator {
-        scene.settings.integrator = i.into();
+        settings.integrator = i.into();
     }
-    let st = &scene.settings;
+    let st = &settings;
     let distinct: u64 = scene.meshes.iter().map(|m| m.triangles.len() as u64).sum();
     let b = scene.bounds();
     println!("scene       {}", args.scene.display());
@@ -109,7 +112,7 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
         "bounds      [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
         b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
     );
-    let accel = accel::build(&scene, args.accel.kind(), &args.accel.options(&scene))?;
+    let accel = accel::build(&scene, args.accel.kind(), &args.accel.options(&settings))?;
     let s = accel.stats();
     println!(
         "accelerator {}: built in {:.3} s, {:.1} MiB, {} BLAS, {} instances",
@@ -132,8 +135,8 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
             peak as f64 / (1u64 << 20) as f64
         );
     }
-    println!("{}", RenderPlan::new(&scene));
-    for w in caustic::integrator::lint::warnings(&scene) {
+    println!("{}", RenderPlan::new(&scene, &settings));
+    for w in caustic::integrator::lint::warnings(&scene, &settings) {
         println!("warning: {w}");
     }
     Ok(())
@@ -141,9 +144,9 @@ pub fn run_info(args: InfoArgs) -> Result<(), Failure> {
 
 pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
     use caustic::analysis::crosscheck::{compare_one, crosscheck, parse_ray, CrosscheckOptions};
-    let mut scene = load(&args.scene, &args.defines)?;
-    args.accel.apply(&mut scene);
-    let options = args.accel.options(&scene);
+    let LoadedScene { scene, mut settings } = load(&args.scene, &args.defines)?;
+    args.accel.apply(&mut settings);
+    let options = args.accel.options(&settings);
     let a = accel::build(&scene, args.a.into(), &options)?;
     let b = accel::build(&scene, args.b.into(), &options)?;
     let (sa, sb) = (a.stats(), b.stats());
@@ -173,6 +176,7 @@ pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
         &CrosscheckOptions {
             rays: args.rays,
             seed: args.seed,
+            image: (settings.width, settings.height),
         },
     );
     println!("{report}");
@@ -186,7 +190,7 @@ pub fn run_crosscheck(args: CrosscheckArgs) -> Result<(), Failure> {
 
 pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     use caustic::analysis::converge::{self, ConvergeOptions, CurveSpec};
-    let mut scene = load(&args.scene, &args.defines)?;
+    let mut loaded = load(&args.scene, &args.defines)?;
     Overrides {
         width: args.width,
         height: args.height,
@@ -203,8 +207,9 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         caustics: args.caustics.map(Into::into),
         ..Overrides::default()
     }
-    .apply(&mut scene, &args.scene)
+    .apply(&mut loaded, &args.scene)
     .map_err(job_failure)?;
+    let settings = &mut loaded.settings;
     let accels: Vec<AccelKind> = if args.accel.is_empty() {
         caustic::analysis::bench::default_accels()
     } else {
@@ -237,10 +242,10 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         film::denoise::require().map_err(bad_input)?;
     }
     if let Some(q) = args.denoise_quality {
-        scene.settings.denoise_quality = q.into();
+        settings.denoise_quality = q.into();
     }
     let max_spp = args.max_spp.unwrap_or(1024);
-    caustic::limits::check_image_limits(scene.settings.width, scene.settings.height, max_spp)
+    caustic::limits::check_image_limits(settings.width, settings.height, max_spp)
         .map_err(|e| bad_input(anyhow::anyhow!("--max-spp {max_spp}: {e}")))?;
     if let Some(n) = args.min_spp {
         if n < 2 || n > max_spp.max(2) {
@@ -249,7 +254,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
                 max_spp.max(2)
             )));
         }
-        scene.settings.min_spp = n;
+        settings.min_spp = n;
     }
     let options = ConvergeOptions {
         budgets: converge::parse_budgets(&args.budgets).map_err(bad_input)?,
@@ -263,7 +268,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
         ),
         photons_per_spp: args.photons_per_spp,
         epsilon: args.epsilon,
-        accel: args.backend.options(&scene),
+        accel: args.backend.options(settings),
         thresholds: args.adaptive.clone(),
         max_spp,
         target_relmse: args.target_relmse,
@@ -283,8 +288,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     for out in args.csv.iter().chain(args.plot.iter()) {
         film::check_writable(out).map_err(bad_input)?;
     }
-    let reference =
-        converge::read_exr(&args.reference, Some((scene.settings.width, scene.settings.height))).map_err(bad_input)?;
+    let reference = converge::read_exr(&args.reference, Some((settings.width, settings.height))).map_err(bad_input)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
@@ -292,7 +296,7 @@ pub fn run_converge(args: ConvergeArgs) -> Result<(), Failure> {
     let quiet = args.quiet;
     let results = pool
         .install(|| {
-            converge::run(&scene, &reference, &options, &mut |line| {
+            converge::run(&loaded, &reference, &options, &mut |line| {
                 if !quiet {
                     eprintln!("{line}");
                 }

@@ -13,8 +13,10 @@ pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
         ..Default::default()
     }
     .load_options();
-    let mut scene = caustic::scene::load_scene_options(&args.scene, &load_options).map_err(bad_input)?;
-    args.accel.apply(&mut scene);
+    let mut settings = caustic::scene::load_scene_options(&args.scene, &load_options)
+        .map_err(bad_input)?
+        .settings;
+    args.accel.apply(&mut settings);
     let size = (
         args.width.unwrap_or(DEFAULT_SIZE.0),
         args.height.unwrap_or(DEFAULT_SIZE.1),
@@ -34,7 +36,7 @@ pub fn run_view(args: ViewArgs) -> Result<(), Failure> {
         }
         return Ok(());
     }
-    open_window(&args, &scene, size, kind, load_options)
+    open_window(&args, &settings, size, kind, load_options)
 }
 
 fn print_latency(r: &latency::LatencyReport) {
@@ -73,7 +75,7 @@ fn print_latency(r: &latency::LatencyReport) {
 #[cfg(feature = "viewer")]
 fn open_window(
     args: &ViewArgs,
-    scene: &caustic::scene::Scene,
+    settings: &caustic::scene::RenderSettings,
     size: (u32, u32),
     accel: caustic::accel::AccelKind,
     load: caustic::scene::LoadOptions,
@@ -83,7 +85,7 @@ fn open_window(
         load,
         accel,
         size,
-        accel_options: args.accel.options(scene),
+        accel_options: args.accel.options(settings),
         spp: args.spp,
     })
     .map_err(|e| Failure::from(anyhow::anyhow!(e)))
@@ -92,7 +94,7 @@ fn open_window(
 #[cfg(not(feature = "viewer"))]
 fn open_window(
     _: &ViewArgs,
-    _: &caustic::scene::Scene,
+    _: &caustic::scene::RenderSettings,
     _: (u32, u32),
     _: caustic::accel::AccelKind,
     _: caustic::scene::LoadOptions,

@@ -73,7 +73,7 @@ use crate::math::rng::{Domain, Rng};
 use crate::math::sampling::{morton_stratified, uniform_cone};
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
 use crate::scene::FresnelModel;
-use crate::scene::{Scene, Shape};
+use crate::scene::{RenderSettings, Scene, Shape};
 use std::f32::consts::PI;
 
 /// Bounding sphere of a specular object.
@@ -148,6 +148,25 @@ struct Emitter {
     probability: f32,
 }
 
+/// What photon tracing takes from the render settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceSettings {
+    /// Seed of every photon's random stream.
+    pub seed: u64,
+    /// The render's bounce limit (`None`: the rules' default).
+    pub max_depth: Option<u32>,
+}
+
+impl TraceSettings {
+    /// The photon tracing of a render with `settings`.
+    pub fn of(settings: &RenderSettings) -> Self {
+        Self {
+            seed: settings.seed,
+            max_depth: settings.max_depth,
+        }
+    }
+}
+
 /// Emits and traces photons for one scene.
 pub struct PhotonTracer<'a> {
     scene: &'a Scene,
@@ -213,26 +232,38 @@ const WAVEFRONT: usize = 256;
 
 impl<'a> PhotonTracer<'a> {
     /// Prepares emission of `count` photons in total.
-    pub fn new(scene: &'a Scene, accel: &'a dyn Accel, count: u64) -> Self {
-        Self::with_casters(scene, accel, count, specular_casters(scene))
+    pub fn new(scene: &'a Scene, settings: TraceSettings, accel: &'a dyn Accel, count: u64) -> Self {
+        Self::with_casters(scene, settings, accel, count, specular_casters(scene))
     }
 
     /// Prepares emission of `count` photons under `rules`.
-    pub fn with_rules(scene: &'a Scene, accel: &'a dyn Accel, count: u64, rules: PhotonRules) -> Self {
+    pub fn with_rules(
+        scene: &'a Scene,
+        settings: TraceSettings,
+        accel: &'a dyn Accel,
+        count: u64,
+        rules: PhotonRules,
+    ) -> Self {
         match rules {
-            PhotonRules::Whitted => Self::new(scene, accel, count),
+            PhotonRules::Whitted => Self::new(scene, settings, accel, count),
             PhotonRules::Physical => {
-                let mut t = Self::with_casters(scene, accel, count, delta_casters(scene));
+                let mut t = Self::with_casters(scene, settings, accel, count, delta_casters(scene));
                 t.rules = rules;
                 t.water = WaterVolume::of(scene);
-                t.max_depth = scene.settings.max_depth.unwrap_or(PHOTON_PATH_DEPTH);
+                t.max_depth = settings.max_depth.unwrap_or(PHOTON_PATH_DEPTH);
                 t
             }
         }
     }
 
     /// Like [`new`](Self::new), with emission restricted to `casters`.
-    pub fn with_casters(scene: &'a Scene, accel: &'a dyn Accel, count: u64, casters: Vec<Caster>) -> Self {
+    pub fn with_casters(
+        scene: &'a Scene,
+        settings: TraceSettings,
+        accel: &'a dyn Accel,
+        count: u64,
+        casters: Vec<Caster>,
+    ) -> Self {
         use crate::scene::light::Emitter as Light;
         let mut emitters: Vec<Emitter> = Light::all(scene)
             .into_iter()
@@ -269,9 +300,9 @@ impl<'a> PhotonTracer<'a> {
             emitters,
             cdf,
             count,
-            seed: scene.settings.seed,
+            seed: settings.seed,
             stream: 0,
-            max_depth: scene.settings.whitted_depth(),
+            max_depth: settings.max_depth.unwrap_or(crate::scene::DEFAULT_WHITTED_DEPTH),
             rules: PhotonRules::Whitted,
             water: None,
         }
@@ -425,7 +456,7 @@ impl<'a> PhotonTracer<'a> {
             return Step::Done;
         };
         let ray = path.ray;
-        if let Some(m) = self.scene.settings.medium.as_ref() {
+        if let Some(m) = self.scene.water_medium.as_ref() {
             path.power *= fog::transmittance(m, &ray, hit.t);
         }
         let si = self.scene.surface_interaction(&ray, &hit);

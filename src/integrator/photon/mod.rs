@@ -33,7 +33,7 @@ pub mod neighbourhood;
 pub mod precomputed;
 pub mod progressive;
 
-pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, PHOTON_PATH_DEPTH};
+pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, TraceSettings, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
 pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
@@ -165,8 +165,8 @@ impl fmt::Display for PhotonStats {
 /// Emits `count` photons, traces them and builds the caustic map, on the
 /// current rayon pool (direct gathers: no precomputation; no coarse
 /// positions, as in a render without `--debug photons`).
-pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
-    photon_pass_with(scene, accel, count, None, false, PhotonRules::Whitted)
+pub fn photon_pass(scene: &Scene, settings: TraceSettings, accel: &dyn Accel, count: u64) -> (PhotonMap, PhotonStats) {
+    photon_pass_with(scene, settings, accel, count, None, false, PhotonRules::Whitted)
 }
 
 /// [`photon_pass`], then, with `precompute`, the irradiance at the stored
@@ -178,13 +178,14 @@ pub fn photon_pass(scene: &Scene, accel: &dyn Accel, count: u64) -> (PhotonMap, 
 /// ([`PhotonMap::coarse_position`]).
 pub fn photon_pass_with(
     scene: &Scene,
+    settings: TraceSettings,
     accel: &dyn Accel,
     count: u64,
     precompute: Option<&Precompute>,
     keep_positions: bool,
     rules: PhotonRules,
 ) -> (PhotonMap, PhotonStats) {
-    let traced = trace_photons_with(scene, accel, count, precompute.is_some(), rules, 0);
+    let traced = trace_photons_with(scene, settings, accel, count, precompute.is_some(), rules, 0);
     build_photon_map(traced, precompute, keep_positions)
 }
 
@@ -219,8 +220,14 @@ pub struct TracedPhotons {
 /// Emits and traces `count` photons on the current rayon pool
 /// (deterministic for any thread count), collecting the candidate
 /// irradiance sites when `with_sites`.
-pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: bool) -> TracedPhotons {
-    trace_photons_with(scene, accel, count, with_sites, PhotonRules::Whitted, 0)
+pub fn trace_photons(
+    scene: &Scene,
+    settings: TraceSettings,
+    accel: &dyn Accel,
+    count: u64,
+    with_sites: bool,
+) -> TracedPhotons {
+    trace_photons_with(scene, settings, accel, count, with_sites, PhotonRules::Whitted, 0)
 }
 
 /// [`trace_photons`] under the given scattering rules, with photon `i`
@@ -229,6 +236,7 @@ pub fn trace_photons(scene: &Scene, accel: &dyn Accel, count: u64, with_sites: b
 /// progressive photon mapping's independent maps ([`progressive`]).
 pub fn trace_photons_with(
     scene: &Scene,
+    settings: TraceSettings,
     accel: &dyn Accel,
     count: u64,
     with_sites: bool,
@@ -236,7 +244,7 @@ pub fn trace_photons_with(
     stream: u64,
 ) -> TracedPhotons {
     let start = Instant::now();
-    let tracer = PhotonTracer::with_rules(scene, accel, count, rules).with_stream(stream);
+    let tracer = PhotonTracer::with_rules(scene, settings, accel, count, rules).with_stream(stream);
     // A path stores at most one photon, so `count` bounds the arrays:
     // reserved at once (address space only, pages are touched as photons
     // arrive), they never move while growing; growth by doubling would

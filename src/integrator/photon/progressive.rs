@@ -29,7 +29,7 @@
 //! [`GatherParams`] ([`ProgressiveSchedule::gather`], a
 //! `fixed_radius`), which any integrator's gather takes.
 
-use super::{build_photon_map, trace_photons_with, GatherParams, PhotonMap, PhotonRules, PhotonStats};
+use super::{build_photon_map, trace_photons_with, GatherParams, PhotonMap, PhotonRules, PhotonStats, TraceSettings};
 use crate::accel::Accel;
 use crate::scene::Scene;
 use std::num::NonZero;
@@ -118,6 +118,8 @@ pub struct ProgressiveSchedule {
     pub keep_positions: bool,
     /// How the photons scatter (the integrator's rules).
     pub rules: PhotonRules,
+    /// The seed and bounce limit of the tracing.
+    pub settings: TraceSettings,
 }
 
 impl ProgressiveSchedule {
@@ -127,6 +129,7 @@ impl ProgressiveSchedule {
     pub fn trace(&self, scene: &Scene, accel: &dyn Accel, sample: u32) -> (PhotonMap, PhotonStats) {
         let traced = trace_photons_with(
             scene,
+            self.settings,
             accel,
             self.photons_per_pass,
             false,
@@ -256,6 +259,10 @@ mod tests {
             cone_k: 1.1,
             keep_positions: false,
             rules: PhotonRules::Whitted,
+            settings: TraceSettings {
+                seed: 0,
+                max_depth: None,
+            },
         };
         let g0 = schedule.gather(0);
         assert_eq!(g0.fixed_radius, Some(0.5));

@@ -48,8 +48,8 @@ pub const FINGERPRINT_FORMAT: u32 = 2;
 /// fingerprint format and the crate version. Thread count and the shard a
 /// process renders are not included: they never change a sample, and every
 /// shard of a render shares its fingerprint.
-pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
-    fingerprint_of(scene, &scene.settings, None, accel, accel_options)
+pub fn fingerprint(scene: &Scene, settings: &RenderSettings, accel: AccelKind, accel_options: &str) -> String {
+    fingerprint_of(scene, settings, None, accel, accel_options)
 }
 
 /// Hex SHA-256 of everything the traced photons depend on
@@ -58,7 +58,7 @@ pub fn fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> Stri
 /// (the trace never reads them; the map's precompute, which depends on the
 /// image size, runs when a render loads the photons), and a purpose field
 /// so that it never equals a render's fingerprint.
-pub fn photon_fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) -> String {
+pub fn photon_fingerprint(scene: &Scene, settings: &RenderSettings, accel: AccelKind, accel_options: &str) -> String {
     let defaults = RenderSettings::default();
     let settings = RenderSettings {
         width: defaults.width,
@@ -68,7 +68,7 @@ pub fn photon_fingerprint(scene: &Scene, accel: AccelKind, accel_options: &str) 
         min_spp: defaults.min_spp,
         adaptive_goal: defaults.adaptive_goal,
         sampler: None,
-        ..scene.settings.clone()
+        ..settings.clone()
     };
     fingerprint_of(scene, &settings, Some("photons"), accel, accel_options)
 }
@@ -96,15 +96,16 @@ fn encode_render(e: &mut Encoder, scene: &Scene, settings: &RenderSettings, acce
     // Exhaustive, so that a new part of the scene does not compile until it
     // is encoded here.
     let Scene {
-        settings: _,
         camera,
         materials,
         lights,
         meshes,
         objects,
         media,
+        ambient,
+        water_medium,
     } = scene;
-    e.put(settings);
+    settings::encode_settings(e, settings, *ambient, water_medium.as_ref());
     e.put(camera);
     e.tag("materials");
     e.u64(materials.len() as u64);
@@ -183,12 +184,12 @@ mod tests {
     use super::*;
     use crate::math::{Vec3, Vec3A};
     use crate::scene::light::{SpotFalloff, SpotLight};
-    use crate::scene::{Light, Material, Object, Shape};
+    use crate::scene::{Light, LoadedScene, Material, Object, Shape};
     use std::sync::Arc;
 
     /// A small scene built in code (no loader defaults): a textured diffuse
     /// quad, a glass sphere, a rough metal mesh, a point and an area light.
-    fn small() -> Scene {
+    fn small() -> LoadedScene {
         let settings = RenderSettings {
             width: 32,
             height: 24,
@@ -222,8 +223,7 @@ mod tests {
         };
         let mesh =
             crate::geometry::Mesh::new("tri", vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]], None).unwrap();
-        Scene {
-            settings,
+        let scene = Scene {
             camera,
             materials: vec![floor, glass, metal],
             lights: vec![
@@ -268,7 +268,10 @@ mod tests {
                 },
             ],
             media: Default::default(),
-        }
+            ambient: Vec3A::ZERO,
+            water_medium: None,
+        };
+        LoadedScene { scene, settings }
     }
 
     fn spot(falloff: SpotFalloff) -> SpotLight {
@@ -282,14 +285,14 @@ mod tests {
         }
     }
 
-    fn body(scene: &Scene) -> String {
+    fn body(s: &LoadedScene) -> String {
         let mut e = Encoder::new();
-        encode_render(&mut e, scene, &scene.settings, AccelKind::KdTree, "");
+        encode_render(&mut e, &s.scene, &s.settings, AccelKind::KdTree, "");
         e.finish()
     }
 
-    fn fp(scene: &Scene) -> String {
-        fingerprint(scene, AccelKind::KdTree, "")
+    fn fp(s: &LoadedScene) -> String {
+        fingerprint(&s.scene, &s.settings, AccelKind::KdTree, "")
     }
 
     /// The encoding is pinned: renaming a field of the scene's types, or
@@ -306,7 +309,7 @@ mod tests {
         );
         // The header: the format, the crate version, the purpose.
         let s = small();
-        assert_ne!(fp(&s), photon_fingerprint(&s, AccelKind::KdTree, ""));
+        assert_ne!(fp(&s), photon_fingerprint(&s.scene, &s.settings, AccelKind::KdTree, ""));
         assert_eq!(fp(&s), fp(&small()));
         assert_eq!(fp(&s).len(), 64);
     }
@@ -316,17 +319,17 @@ mod tests {
     fn names_and_paths_do_not_count_content_does() {
         let base = fp(&small());
         let mut s = small();
-        s.materials[0].name = "renamed".into();
-        s.objects[1].name = "renamed".into();
-        s.meshes[0] = Arc::new(crate::geometry::Mesh {
+        s.scene.materials[0].name = "renamed".into();
+        s.scene.objects[1].name = "renamed".into();
+        s.scene.meshes[0] = Arc::new(crate::geometry::Mesh {
             name: "elsewhere/other.ply".into(),
-            ..(*s.meshes[0]).clone()
+            ..(*s.scene.meshes[0]).clone()
         });
         assert_eq!(base, fp(&s));
         // One vertex moved by one ulp.
-        let mut mesh = (*s.meshes[0]).clone();
+        let mut mesh = (*s.scene.meshes[0]).clone();
         mesh.positions[1].x = f32::from_bits(mesh.positions[1].x.to_bits() + 1);
-        s.meshes[0] = Arc::new(mesh);
+        s.scene.meshes[0] = Arc::new(mesh);
         assert_ne!(base, fp(&s));
         // The same texels from another file: the same; one texel changed: not.
         let retexture = |data: Vec<[u8; 4]>, name: &str| {
@@ -336,7 +339,7 @@ mod tests {
                 space: crate::texture::ColourSpace::Srgb,
             };
             let image = Arc::new(crate::texture::Image::new(name, 2, 2, texels));
-            s.materials[0].textures.as_mut().unwrap().diffuse =
+            s.scene.materials[0].textures.as_mut().unwrap().diffuse =
                 Some(crate::texture::Texture::Image(crate::texture::ImageTexture::new(image)));
             fp(&s)
         };
@@ -351,7 +354,7 @@ mod tests {
     /// fingerprint of its own.
     #[test]
     fn every_field_that_changes_samples_changes_the_fingerprint() {
-        type Edit = fn(&mut Scene);
+        type Edit = fn(&mut LoadedScene);
         let edits: &[(&str, Edit)] = &[
             ("width", |s| s.settings.width += 1),
             ("height", |s| s.settings.height += 1),
@@ -370,7 +373,7 @@ mod tests {
             ("sampler", |s| {
                 s.settings.sampler = Some(crate::math::SamplerKind::Sobol)
             }),
-            ("ambient", |s| s.settings.ambient.y = 0.1),
+            ("ambient", |s| s.scene.ambient.y = 0.1),
             ("triangle test", |s| {
                 s.settings.triangle_test = crate::geometry::TriangleTest::MollerTrumbore
             }),
@@ -391,114 +394,120 @@ mod tests {
                 s.settings.photons.alpha = 0.5;
             }),
             ("hide emitters", |s| s.settings.hide_emitters = true),
-            ("camera position", |s| s.camera.position.z += 1.0e-3),
-            ("camera fov", |s| s.camera.fov_deg += 1.0),
-            ("fov axis", |s| s.camera.fov_axis = crate::scene::FovAxis::X),
-            ("aperture", |s| s.camera.aperture_radius = 0.1),
+            ("camera position", |s| s.scene.camera.position.z += 1.0e-3),
+            ("camera fov", |s| s.scene.camera.fov_deg += 1.0),
+            ("fov axis", |s| s.scene.camera.fov_axis = crate::scene::FovAxis::X),
+            ("aperture", |s| s.scene.camera.aperture_radius = 0.1),
             ("focus with a lens", |s| {
-                s.camera.aperture_radius = 0.1;
-                s.camera.focus_distance += 1.0;
+                s.scene.camera.aperture_radius = 0.1;
+                s.scene.camera.focus_distance += 1.0;
             }),
-            ("near clip", |s| s.camera.near_clip = 0.5),
+            ("near clip", |s| s.scene.camera.near_clip = 0.5),
             ("orthographic", |s| {
-                s.camera.projection = crate::scene::Projection::Orthographic {
+                s.scene.camera.projection = crate::scene::Projection::Orthographic {
                     half_width: 2.0,
                     half_height: 0.0,
                 }
             }),
             ("tent filter", |s| {
-                s.camera.filter = crate::film::filter::PixelFilter::Tent { radius: 1.0 }
+                s.scene.camera.filter = crate::film::filter::PixelFilter::Tent { radius: 1.0 }
             }),
             ("wide box", |s| {
-                s.camera.filter = crate::film::filter::PixelFilter::Box { radius: 1.0 }
+                s.scene.camera.filter = crate::film::filter::PixelFilter::Box { radius: 1.0 }
             }),
             ("gaussian", |s| {
-                s.camera.filter = crate::film::filter::PixelFilter::gaussian(0.5)
+                s.scene.camera.filter = crate::film::filter::PixelFilter::gaussian(0.5)
             }),
-            ("diffuse", |s| s.materials[0].diffuse.x += 1.0e-6),
+            ("diffuse", |s| s.scene.materials[0].diffuse.x += 1.0e-6),
             ("shading model", |s| {
-                s.materials[0].model = crate::scene::ShadingModel::Phong
+                s.scene.materials[0].model = crate::scene::ShadingModel::Phong
             }),
-            ("shininess", |s| s.materials[0].shininess = 2.0),
-            ("emission", |s| s.materials[0].emission = Vec3A::ONE),
-            ("one-sided", |s| s.materials[0].one_sided = true),
-            ("null", |s| s.materials[0].null = true),
+            ("shininess", |s| s.scene.materials[0].shininess = 2.0),
+            ("emission", |s| s.scene.materials[0].emission = Vec3A::ONE),
+            ("one-sided", |s| s.scene.materials[0].one_sided = true),
+            ("null", |s| s.scene.materials[0].null = true),
             ("texture factor", |s| {
                 if let Some(crate::texture::Texture::Image(i)) =
-                    s.materials[0].textures.as_mut().unwrap().diffuse.as_mut()
+                    s.scene.materials[0].textures.as_mut().unwrap().diffuse.as_mut()
                 {
                     i.factor.y = 0.5;
                 }
             }),
             ("texture wrap", |s| {
                 if let Some(crate::texture::Texture::Image(i)) =
-                    s.materials[0].textures.as_mut().unwrap().diffuse.as_mut()
+                    s.scene.materials[0].textures.as_mut().unwrap().diffuse.as_mut()
                 {
                     i.wrap[1] = crate::texture::WrapMode::Clamp;
                 }
             }),
             ("texture slot", |s| {
-                let t = s.materials[0].textures.as_mut().unwrap();
+                let t = s.scene.materials[0].textures.as_mut().unwrap();
                 t.specular = t.diffuse.take();
             }),
             ("normal map", |s| {
-                s.materials[0].textures.as_mut().unwrap().normal_map = Some(crate::scene::NormalMap {
+                s.scene.materials[0].textures.as_mut().unwrap().normal_map = Some(crate::scene::NormalMap {
                     texture: crate::texture::Texture::Constant(Vec3A::Z),
                     scale: 1.0,
                 })
             }),
-            ("ior", |s| s.materials[1].dielectric.as_mut().unwrap().ior = 1.33),
+            ("ior", |s| s.scene.materials[1].dielectric.as_mut().unwrap().ior = 1.33),
             ("glass roughness", |s| {
-                s.materials[1].dielectric.as_mut().unwrap().roughness = 0.1
+                s.scene.materials[1].dielectric.as_mut().unwrap().roughness = 0.1
             }),
-            ("thin", |s| s.materials[1].dielectric.as_mut().unwrap().thin = true),
+            ("thin", |s| {
+                s.scene.materials[1].dielectric.as_mut().unwrap().thin = true
+            }),
             ("fresnel", |s| {
-                s.materials[1].dielectric.as_mut().unwrap().fresnel = Some(crate::scene::FresnelModel::Schlick)
+                s.scene.materials[1].dielectric.as_mut().unwrap().fresnel = Some(crate::scene::FresnelModel::Schlick)
             }),
             ("mirror", |s| {
-                s.materials[1].mirror = Some(crate::scene::Mirror {
+                s.scene.materials[1].mirror = Some(crate::scene::Mirror {
                     reflectivity: 0.5,
                     tint: Vec3A::ONE,
                 })
             }),
             ("metal roughness", |s| {
-                s.materials[2].conductor.as_mut().unwrap().roughness = 0.3
+                s.scene.materials[2].conductor.as_mut().unwrap().roughness = 0.3
             }),
-            ("metal k", |s| s.materials[2].conductor.as_mut().unwrap().k.z = 2.0),
-            ("anisotropy", |s| s.materials[2].roughness_v = Some(0.05)),
+            ("metal k", |s| {
+                s.scene.materials[2].conductor.as_mut().unwrap().k.z = 2.0
+            }),
+            ("anisotropy", |s| s.scene.materials[2].roughness_v = Some(0.05)),
             ("beckmann", |s| {
-                s.materials[2].microfacet = crate::scene::MicrofacetDistribution::Beckmann
+                s.scene.materials[2].microfacet = crate::scene::MicrofacetDistribution::Beckmann
             }),
             ("coating", |s| {
-                s.materials[0].coating = Some(crate::scene::Coating::smooth(1.5))
+                s.scene.materials[0].coating = Some(crate::scene::Coating::smooth(1.5))
             }),
             ("rough coating", |s| {
                 let mut c = crate::scene::Coating::smooth(1.5);
                 c.roughness = 0.2;
-                s.materials[0].coating = Some(c);
+                s.scene.materials[0].coating = Some(c);
             }),
-            ("principled", |s| s.materials[2].principled = Some(Default::default())),
+            ("principled", |s| {
+                s.scene.materials[2].principled = Some(Default::default())
+            }),
             ("principled clearcoat", |s| {
-                s.materials[2].principled = Some(crate::scene::Principled {
+                s.scene.materials[2].principled = Some(crate::scene::Principled {
                     clearcoat: 0.5,
                     ..Default::default()
                 })
             }),
-            ("disney", |s| s.materials[2].disney = Some(Default::default())),
+            ("disney", |s| s.scene.materials[2].disney = Some(Default::default())),
             ("disney sheen", |s| {
-                s.materials[2].disney = Some(crate::scene::Disney {
+                s.scene.materials[2].disney = Some(crate::scene::Disney {
                     sheen: 0.5,
                     ..Default::default()
                 })
             }),
             ("disney sampling rate", |s| {
-                s.materials[2].disney = Some(crate::scene::Disney {
+                s.scene.materials[2].disney = Some(crate::scene::Disney {
                     clearcoat_sampling_rate: 0.5,
                     ..Default::default()
                 })
             }),
             ("blend", |s| {
-                s.materials[2].blend = Some(Box::new(crate::scene::Blend {
+                s.scene.materials[2].blend = Some(Box::new(crate::scene::Blend {
                     weight: 0.5,
                     weight_texture: None,
                     first: Some(Material::diffuse("a", Vec3A::ONE)),
@@ -506,7 +515,7 @@ mod tests {
                 }))
             }),
             ("blend weight", |s| {
-                s.materials[2].blend = Some(Box::new(crate::scene::Blend {
+                s.scene.materials[2].blend = Some(Box::new(crate::scene::Blend {
                     weight: 0.25,
                     weight_texture: None,
                     first: Some(Material::diffuse("a", Vec3A::ONE)),
@@ -514,7 +523,7 @@ mod tests {
                 }))
             }),
             ("blend holes swapped", |s| {
-                s.materials[2].blend = Some(Box::new(crate::scene::Blend {
+                s.scene.materials[2].blend = Some(Box::new(crate::scene::Blend {
                     weight: 0.5,
                     weight_texture: None,
                     first: None,
@@ -522,73 +531,75 @@ mod tests {
                 }))
             }),
             ("cutout", |s| {
-                s.materials[0].textures.as_mut().unwrap().alpha = Some(crate::scene::AlphaMask {
+                s.scene.materials[0].textures.as_mut().unwrap().alpha = Some(crate::scene::AlphaMask {
                     texture: crate::texture::Texture::Constant(Vec3A::splat(0.5)),
                     cutoff: 0.5,
                 })
             }),
             ("point power", |s| {
-                if let Light::Point { intensity, .. } = &mut s.lights[0] {
+                if let Light::Point { intensity, .. } = &mut s.scene.lights[0] {
                     intensity.x *= 2.0;
                 }
             }),
             ("area samples", |s| {
-                if let Light::Area(a) = &mut s.lights[1] {
+                if let Light::Area(a) = &mut s.scene.lights[1] {
                     a.samples += 1;
                 }
             }),
             ("environment", |s| {
-                s.lights.push(Light::Environment {
+                s.scene.lights.push(Light::Environment {
                     radiance: Vec3A::splat(0.5),
                     map: None,
                 })
             }),
-            ("light order", |s| s.lights.swap(0, 1)),
-            ("spot", |s| s.lights.push(Light::Spot(spot(SpotFalloff::Mitsuba)))),
-            ("gltf spot", |s| s.lights.push(Light::Spot(spot(SpotFalloff::Gltf)))),
+            ("light order", |s| s.scene.lights.swap(0, 1)),
+            ("spot", |s| s.scene.lights.push(Light::Spot(spot(SpotFalloff::Mitsuba)))),
+            ("gltf spot", |s| {
+                s.scene.lights.push(Light::Spot(spot(SpotFalloff::Gltf)))
+            }),
             ("sphere radius", |s| {
-                if let Shape::Sphere(b) = &mut s.objects[1].shape {
+                if let Shape::Sphere(b) = &mut s.scene.objects[1].shape {
                     b.radius = 0.6;
                 }
             }),
-            ("object material", |s| s.objects[1].material = 0),
+            ("object material", |s| s.scene.objects[1].material = 0),
             ("flat mesh", |s| {
-                if let Shape::Mesh { smooth, .. } = &mut s.objects[2].shape {
+                if let Shape::Mesh { smooth, .. } = &mut s.scene.objects[2].shape {
                     *smooth = false;
                 }
             }),
             ("mesh transform", |s| {
-                if let Shape::Mesh { transform, .. } = &mut s.objects[2].shape {
+                if let Shape::Mesh { transform, .. } = &mut s.scene.objects[2].shape {
                     *transform = crate::math::Transform::from_srt(Vec3::ONE, Vec3::ZERO, Vec3::X).unwrap();
                 }
             }),
             ("mesh uvs", |s| {
-                let mut m = (*s.meshes[0]).clone();
+                let mut m = (*s.scene.meshes[0]).clone();
                 m.uvs = vec![crate::math::Vec2::ZERO; 3];
-                s.meshes[0] = Arc::new(m);
+                s.scene.meshes[0] = Arc::new(m);
             }),
             ("mesh normals", |s| {
-                let mut m = (*s.meshes[0]).clone();
+                let mut m = (*s.scene.meshes[0]).clone();
                 m.normals[0] = Vec3::Y;
-                s.meshes[0] = Arc::new(m);
+                s.scene.meshes[0] = Arc::new(m);
             }),
             ("mesh winding", |s| {
-                let mut m = (*s.meshes[0]).clone();
+                let mut m = (*s.scene.meshes[0]).clone();
                 m.triangles[0] = [0, 2, 1];
-                s.meshes[0] = Arc::new(m);
+                s.scene.meshes[0] = Arc::new(m);
             }),
             ("medium", |s| {
-                s.media.list.push(crate::scene::HomogeneousMedium {
+                s.scene.media.list.push(crate::scene::HomogeneousMedium {
                     name: "fog".into(),
                     sigma_t: Vec3A::splat(0.1),
                     albedo: Vec3A::splat(0.9),
                     phase: crate::scene::PhaseFunction::Isotropic,
                     sample_emitters: true,
                 });
-                s.media.camera = Some(0);
+                s.scene.media.camera = Some(0);
             }),
             ("pass through", |s| {
-                s.media.pass_through = crate::scene::PassThrough::Volumetric
+                s.scene.media.pass_through = crate::scene::PassThrough::Volumetric
             }),
         ];
         let base = fp(&small());
@@ -602,8 +613,14 @@ mod tests {
                 panic!("{name}: the same fingerprint as {other}");
             }
         }
-        assert_ne!(base, fingerprint(&small(), AccelKind::Brute, ""));
-        assert_ne!(base, fingerprint(&small(), AccelKind::KdTree, "robust"));
+        assert_ne!(base, {
+            let s = small();
+            fingerprint(&s.scene, &s.settings, AccelKind::Brute, "")
+        });
+        assert_ne!(base, {
+            let s = small();
+            fingerprint(&s.scene, &s.settings, AccelKind::KdTree, "robust")
+        });
     }
 
     /// Display-only settings, and values the render does not read, change
@@ -621,17 +638,26 @@ mod tests {
         // the sampler the integrator uses anyway.
         let mut s = small();
         s.settings.photons.alpha = 0.5;
-        s.camera.focus_distance += 1.0;
+        s.scene.camera.focus_distance += 1.0;
         s.settings.sampler = Some(crate::math::SamplerKind::Independent);
         assert_eq!(base, fp(&s));
         // The photons do not depend on the image size or samples per pixel.
-        let photons = photon_fingerprint(&small(), AccelKind::KdTree, "");
+        let photons = {
+            let s = small();
+            photon_fingerprint(&s.scene, &s.settings, AccelKind::KdTree, "")
+        };
         let mut s = small();
         s.settings.width += 1;
         s.settings.spp += 1;
-        assert_eq!(photons, photon_fingerprint(&s, AccelKind::KdTree, ""));
+        assert_eq!(
+            photons,
+            photon_fingerprint(&s.scene, &s.settings, AccelKind::KdTree, "")
+        );
         s.settings.seed += 1;
-        assert_ne!(photons, photon_fingerprint(&s, AccelKind::KdTree, ""));
+        assert_ne!(
+            photons,
+            photon_fingerprint(&s.scene, &s.settings, AccelKind::KdTree, "")
+        );
     }
 
     #[test]

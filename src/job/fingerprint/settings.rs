@@ -3,14 +3,17 @@
 
 use super::encoder::{Encoder, Fingerprint};
 use crate::geometry::{TriangleTest, WaterSurface, Wave};
-use crate::math::SamplerKind;
+use crate::math::{SamplerKind, Vec3A};
 use crate::scene::medium::VolumeCoefficients;
 use crate::scene::{
     AdaptiveGoal, CausticsMode, GatherMode, IntegratorKind, Medium, PhotonSettings, RenderSettings, SampleSharing,
 };
 
-impl Fingerprint for RenderSettings {
-    fn encode(&self, e: &mut Encoder) {
+/// Encodes `settings` with the scene's `ambient` light and water
+/// `medium`, in the order the settings held them before they moved to the
+/// scene (the encoding, and so every fingerprint, is unchanged).
+pub(super) fn encode_settings(e: &mut Encoder, settings: &RenderSettings, ambient: Vec3A, medium: Option<&Medium>) {
+    {
         let RenderSettings {
             width,
             height,
@@ -26,13 +29,11 @@ impl Fingerprint for RenderSettings {
             output: _,
             denoise: _,
             denoise_quality: _,
-            ambient,
             triangle_test,
             sharing,
             photons,
-            medium,
             hide_emitters,
-        } = self;
+        } = settings;
         e.tag("settings");
         e.u32(*width);
         e.u32(*height);
@@ -49,12 +50,12 @@ impl Fingerprint for RenderSettings {
             AdaptiveGoal::Image => 1,
         });
         // The sampler in effect (an unset one is the integrator's default).
-        e.u8(match self.sampler_kind() {
+        e.u8(match settings.sampler_kind() {
             SamplerKind::Independent => 0,
             SamplerKind::Sobol => 1,
         });
         e.u64(*seed);
-        e.put(ambient);
+        e.put(&ambient);
         e.u8(match triangle_test {
             TriangleTest::Watertight => 0,
             TriangleTest::MollerTrumbore => 1,
@@ -64,7 +65,7 @@ impl Fingerprint for RenderSettings {
             SampleSharing::Split => 1,
         });
         e.put(photons);
-        e.option(medium.as_ref(), |e, m| e.put(m));
+        e.option(medium, |e, m| e.put(m));
         e.bool(*hide_emitters);
     }
 }

@@ -60,6 +60,8 @@ pub struct GltfOptions {
 pub struct GltfScene {
     /// The scene.
     pub scene: Scene,
+    /// The render settings (the chosen camera's image size, the defaults).
+    pub settings: RenderSettings,
     /// Messages about what caustic reads but ignores (extensions used but
     /// not required, attributes it does not render, …).
     pub warnings: Vec<String>,
@@ -74,6 +76,16 @@ pub struct GltfScene {
 pub fn is_gltf_path(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+impl GltfScene {
+    /// The scene and its settings, the warnings left out.
+    pub fn into_loaded(self) -> crate::scene::LoadedScene {
+        crate::scene::LoadedScene {
+            scene: self.scene,
+            settings: self.settings,
+        }
+    }
 }
 
 /// Reads a glTF 2.0 model as a scene.
@@ -146,13 +158,13 @@ pub fn load_gltf_scene(path: &Path, options: &GltfOptions) -> Result<GltfScene, 
     builder.set_media(media);
     // The camera may frame the scene's bounds: it is chosen once the scene is built.
     builder.set_camera(cameras::placeholder());
-    let mut scene = builder.build()?;
+    let mut scene = builder.build()?.scene;
     let mut camera = cameras::placeholder();
     let framed_camera = cameras::choose(&ctx, &graph, &scene, &mut settings, &mut camera)?;
     scene.camera = camera;
-    scene.settings = settings;
     Ok(GltfScene {
         scene,
+        settings,
         warnings: ctx.warnings,
         framed_camera,
         default_environment,

@@ -207,7 +207,6 @@ mod tests {
     fn scene_with(shape: Shape, meshes: Vec<Arc<Mesh>>) -> Scene {
         Scene {
             media: Default::default(),
-            settings: Default::default(),
             camera: crate::scene::Camera::new(Vec3A::Z * 5.0, Vec3A::ZERO, Vec3A::Y, 40.0).unwrap(),
             materials: vec![Material::diffuse("m", Vec3A::ONE)],
             lights: Vec::new(),
@@ -217,6 +216,8 @@ mod tests {
                 shape,
                 material: 0,
             }],
+            ambient: Vec3A::ZERO,
+            water_medium: None,
         }
     }
 

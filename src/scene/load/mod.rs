@@ -2,7 +2,7 @@
 //!
 //! [`load_toml_scene`] reads a TOML file (bounded in size), [`parse_scene`] parses
 //! it into a [`SceneDesc`] (serde, every table `deny_unknown_fields`) and then
-//! checks every value before building the immutable [`Scene`]. Every error is
+//! checks every value before building the immutable [`Scene`](crate::scene::Scene). Every error is
 //! a [`SceneError`] whose message starts with `file:line:column:` when the
 //! problem has a place in the file (toml's byte spans, converted here so that
 //! syntax, type and semantic errors all read the same way).
@@ -37,7 +37,7 @@ pub use settings::{DEFAULT_VFOV_DEG, MAX_DEPTH, MAX_EXPOSURE_STOPS, MAX_PHOTON_G
 
 use crate::geometry::water::WaterSurface;
 use crate::scene::desc::{IntegratorName, ObjectKind, SceneDesc};
-use crate::scene::{Object, Origin, Scene, SceneBuilder, Shape};
+use crate::scene::{LoadedScene, Object, Origin, SceneBuilder, Shape};
 use ctx::Ctx;
 use std::io::Read;
 use std::path::Path;
@@ -49,7 +49,7 @@ pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
 /// Loads and validates a scene file (at most [`MAX_SCENE_FILE_BYTES`]).
 /// Relative mesh paths are resolved against the scene file's directory.
-pub fn load_toml_scene(path: &Path) -> Result<Scene, SceneError> {
+pub fn load_toml_scene(path: &Path) -> Result<LoadedScene, SceneError> {
     let text = read_scene_text(path)?;
     parse_scene(&text, path)
 }
@@ -87,7 +87,7 @@ pub(crate) fn read_scene_text(path: &Path) -> Result<String, SceneError> {
 
 /// Parses and validates scene text. `path` names the file in messages, and
 /// relative mesh paths are resolved against its directory.
-pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, SceneError> {
     let desc: SceneDesc = toml::from_str(text).map_err(|e| SceneError::Toml {
         path: path.into(),
         place: e.span().map(|s| Place::of_offset(text, s.start)),
@@ -199,11 +199,13 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     builder.set_media(ctx.scene_media(&desc, desc.render.integrator == Some(IntegratorName::Volpath))?);
     builder.set_camera(camera);
     builder.set_settings(settings);
-    let mut scene = builder.build()?;
+    builder.set_ambient(ctx.ambient(&desc.render)?);
+    let mut loaded = builder.build()?;
     if let Some(m) = &desc.medium {
-        scene.settings.medium = Some(ctx.medium(m, waters.first().map(|(i, w)| (*i, w)), scene.bounds())?);
+        let scene = &mut loaded.scene;
+        scene.water_medium = Some(ctx.medium(m, waters.first().map(|(i, w)| (*i, w)), scene.bounds())?);
     }
-    Ok(scene)
+    Ok(loaded)
 }
 
 fn kind_name(kind: ObjectKind) -> &'static str {

@@ -29,6 +29,14 @@ pub const MAX_PHOTON_GATHER: u32 = 100_000;
 pub const DEFAULT_VFOV_DEG: f32 = 45.0;
 
 impl Ctx<'_> {
+    /// The `[render]` table's `ambient` light (black when absent).
+    pub(super) fn ambient(&self, r: &RenderDesc) -> Result<Vec3A, SceneError> {
+        match &r.ambient {
+            None => Ok(Vec3A::ZERO),
+            Some(s) => self.colour(s, "ambient"),
+        }
+    }
+
     pub(super) fn render(&self, r: &RenderDesc) -> Result<RenderSettings, SceneError> {
         let d = RenderSettings::default();
         let int = |s: &Option<Spanned<u32>>, default: u32, key: &str, min: u32, max: u32| match s {
@@ -87,10 +95,6 @@ impl Ctx<'_> {
                 e
             }
         };
-        let ambient = match &r.ambient {
-            None => d.ambient,
-            Some(s) => self.colour(s, "ambient")?,
-        };
         Ok(RenderSettings {
             width,
             height,
@@ -105,7 +109,6 @@ impl Ctx<'_> {
                 },
                 exposure,
             },
-            ambient,
             triangle_test: match r.triangle_test {
                 None => d.triangle_test,
                 Some(TriangleTestName::Watertight) => TriangleTest::Watertight,
@@ -117,7 +120,6 @@ impl Ctx<'_> {
                 Some(SharingName::Split) => SampleSharing::Split,
             },
             photons: d.photons,
-            medium: None,
             hide_emitters: r.hide_emitters.unwrap_or(d.hide_emitters),
             denoise: r.denoise.unwrap_or(d.denoise),
             denoise_quality: match r.denoise_quality {

@@ -27,7 +27,7 @@ pub mod xml;
 use crate::geometry::Mesh;
 use crate::io::LoadLimits;
 use crate::scene::load::SceneError;
-use crate::scene::{Light, Material, Object, RenderSettings, Scene, Shape};
+use crate::scene::{Light, LoadedScene, Material, Object, RenderSettings, Scene, Shape};
 use crate::texture::{ColourSpace, Image};
 use props::{Ids, Plugin};
 use rayon::prelude::*;
@@ -42,6 +42,8 @@ use xml::{Document, Origin};
 pub struct MitsubaScene {
     /// The scene.
     pub scene: Scene,
+    /// The render settings its sensor, film, sampler and integrator ask for.
+    pub settings: RenderSettings,
     /// Messages about what caustic reads but does not render (output-only
     /// integrator wrappers).
     pub warnings: Vec<String>,
@@ -49,6 +51,16 @@ pub struct MitsubaScene {
     pub xml_seconds: f64,
     /// Seconds spent loading the mesh files (in parallel).
     pub mesh_seconds: f64,
+}
+
+impl MitsubaScene {
+    /// The scene and its settings, the warnings and timings left out.
+    pub fn into_loaded(self) -> LoadedScene {
+        LoadedScene {
+            scene: self.scene,
+            settings: self.settings,
+        }
+    }
 }
 
 /// Reads a Mitsuba XML scene; `defines` are `-D name=value` parameters,
@@ -209,7 +221,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     builder.set_media(media);
     builder.set_camera(sensor.camera);
     builder.set_settings(settings);
-    let scene = builder.build()?;
+    let LoadedScene { scene, settings } = builder.build()?;
     if scene.objects.is_empty() && scene.lights.is_empty() {
         return Err(doc.root.origin.error("the scene has no shape and no emitter"));
     }
@@ -227,6 +239,7 @@ pub fn load_mitsuba_scene(path: &Path, defines: &[(String, String)]) -> Result<M
     }
     Ok(MitsubaScene {
         scene,
+        settings,
         warnings,
         xml_seconds: start.elapsed().as_secs_f64() - mesh_seconds,
         mesh_seconds,

@@ -22,7 +22,7 @@ mod media;
 mod objects;
 mod settings;
 
-use super::Scene;
+use super::LoadedScene;
 use crate::film::output::OutputError;
 use std::path::{Component, Path, PathBuf};
 use thiserror::Error;
@@ -73,7 +73,8 @@ impl WriteError {
 /// Writes `scene` to `out` as caustic's TOML, meshes built in memory as
 /// PLY files named after `out` in its directory (`out-mesh-3.ply`), and
 /// checks that the text loads back to the same scene before writing it.
-pub fn write_toml_scene(scene: &Scene, out: &Path) -> Result<Written, WriteError> {
+pub fn write_toml_scene(loaded: &LoadedScene, out: &Path) -> Result<Written, WriteError> {
+    let LoadedScene { scene, settings } = loaded;
     crate::film::output::check_writable(out)?;
     let dir = output_dir(out);
     let stem = out
@@ -83,12 +84,9 @@ pub fn write_toml_scene(scene: &Scene, out: &Path) -> Result<Written, WriteError
     let mut doc = Table::new();
     doc.insert(
         "render".into(),
-        Value::Table(settings::render(&scene.settings, &scene.media)?),
+        Value::Table(settings::render(settings, scene.ambient, &scene.media)?),
     );
-    doc.insert(
-        "photons".into(),
-        Value::Table(settings::photons(&scene.settings.photons)),
-    );
+    doc.insert("photons".into(), Value::Table(settings::photons(&settings.photons)));
     doc.insert("camera".into(), Value::Table(settings::camera(&scene.camera, scene)?));
     let names = materials::Names::of(scene)?;
     doc.insert("materials".into(), Value::Table(materials::materials(&names, &dir)?));
@@ -109,7 +107,7 @@ pub fn write_toml_scene(scene: &Scene, out: &Path) -> Result<Written, WriteError
     if !scene.media.list.is_empty() {
         doc.insert("media".into(), Value::Table(media::media(scene)?));
     }
-    if let Some(m) = &scene.settings.medium {
+    if let Some(m) = &scene.water_medium {
         doc.insert("medium".into(), Value::Table(media::water_medium(m)));
     }
     let text = format!(
@@ -119,7 +117,7 @@ pub fn write_toml_scene(scene: &Scene, out: &Path) -> Result<Written, WriteError
     let written = objects::write_meshes(scene, &meshes)?;
     let check = super::parse_scene(&text, out)
         .map_err(|e| WriteError::Reload(Box::new(e)))
-        .and_then(|again| match super::compare::first_difference(scene, &again) {
+        .and_then(|again| match super::compare::first_difference(loaded, &again) {
             None => Ok(()),
             Some(d) => Err(WriteError::Differs(d)),
         });

@@ -88,7 +88,7 @@ fn same_file(mesh: &Mesh) -> Option<PathBuf> {
 
 /// The object the water's `[medium]` fills and its mesh, when there is one.
 fn water_boundary(scene: &Scene) -> Option<(usize, u32)> {
-    let m = scene.settings.medium.as_ref()?;
+    let m = scene.water_medium.as_ref()?;
     match scene.objects.get(m.boundary as usize)?.shape {
         Shape::Mesh { mesh, .. } => Some((m.boundary as usize, mesh)),
         _ => None,
@@ -161,7 +161,7 @@ pub(super) fn object(scene: &Scene, i: usize, o: &Object, names: &Names, plan: &
         } => {
             if let Some((object, _)) = water_boundary(scene).filter(|(object, _)| *object == i) {
                 debug_assert_eq!(object, i);
-                let m = scene.settings.medium.as_ref().expect("a water boundary has a medium");
+                let m = scene.water_medium.as_ref().expect("a water boundary has a medium");
                 super::media::water_object(&m.surface, &mut t);
             } else {
                 t.insert("type".into(), string("mesh"));

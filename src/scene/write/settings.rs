@@ -6,7 +6,7 @@ use crate::film::denoise::DenoiseQuality;
 use crate::film::filter::PixelFilter;
 use crate::film::ToneMap;
 use crate::geometry::TriangleTest;
-use crate::math::SamplerKind;
+use crate::math::{SamplerKind, Vec3A};
 use crate::scene::{
     AdaptiveGoal, Camera, CausticsMode, GatherMode, IntegratorKind, Media, PassThrough, PhotonSettings, Projection,
     RenderSettings, SampleSharing, Scene,
@@ -15,7 +15,7 @@ use toml::{Table, Value};
 
 /// `[render]`; `integrator = "volpath"` when null surfaces are crossed as
 /// Mitsuba's `volpath` crosses them.
-pub(super) fn render(s: &RenderSettings, media: &Media) -> Result<Table, WriteError> {
+pub(super) fn render(s: &RenderSettings, ambient: Vec3A, media: &Media) -> Result<Table, WriteError> {
     let d = RenderSettings::default();
     let mut t = Table::new();
     t.insert("width".into(), int(s.width));
@@ -68,8 +68,8 @@ pub(super) fn render(s: &RenderSettings, media: &Media) -> Result<Table, WriteEr
     };
     t.insert("tone_map".into(), string(tone_map));
     t.insert("exposure".into(), num(s.output.exposure));
-    if s.ambient != d.ambient {
-        t.insert("ambient".into(), vec3(s.ambient));
+    if ambient != Vec3A::ZERO {
+        t.insert("ambient".into(), vec3(ambient));
     }
     let test = match s.triangle_test {
         TriangleTest::Watertight => "watertight",
