@@ -273,8 +273,9 @@ impl<'a> Bsdf<'a> {
     /// The BSDF of `m`, with `default_fresnel` for dielectrics that do not
     /// name a Fresnel formula.
     pub fn for_material(m: &'a Material, default_fresnel: FresnelModel, transport: Transport) -> Self {
+        // Unused slots hold the payload-free `Null`: nothing to write but its tag.
         let mut b = Self {
-            lobes: [(Lobe::Lambert(Lambert { kd: Vec3A::ZERO }), 0.0); MAX_LOBES],
+            lobes: [(Lobe::Null(Null), 0.0); MAX_LOBES],
             count: 0,
             two_sided: !m.one_sided,
             transport,
@@ -580,7 +581,7 @@ impl<'a> Bsdf<'a> {
         let wo_local = if flip { Vec3A::new(wo.x, wo.y, -wo.z) } else { wo };
         // Choose a lobe and reuse what is left of `uc` inside it.
         let (chosen, uc_rest) = self.choose(uc)?;
-        let (lobe, w) = self.lobes()[chosen];
+        let (lobe, w) = &self.lobes()[chosen];
         let mut s = lobe.sample(wo_local, uc_rest, u, self.transport)?;
         if s.delta {
             s.pdf *= w / total;

@@ -16,6 +16,7 @@
 use crate::accel::Accel;
 use crate::bsdf::specular::{reflect, refract};
 pub use crate::film::accum::AOV_SAMPLES;
+use crate::geometry::Hit;
 use crate::math::{offset_ray_origin, Ray, Vec3A};
 use crate::scene::{Light, Material, Quad, Scene};
 
@@ -115,10 +116,27 @@ impl<'a> AovTracer<'a> {
 
     /// `(albedo, normal)` seen along the camera ray `ray`.
     pub fn trace(&self, ray: &Ray) -> (Vec3A, Vec3A) {
+        let (albedo, normal, _) = self.trace_keeping_hit(ray);
+        (albedo, normal)
+    }
+
+    /// [`trace`](Self::trace), and the camera ray's own nearest hit, which
+    /// the integrator then starts from instead of tracing the ray again
+    /// (the same query of the same ray: the same hit).
+    pub fn trace_keeping_hit(&self, ray: &Ray) -> (Vec3A, Vec3A, Option<Hit>) {
+        let first = self.accel.intersect(ray, f32::INFINITY);
+        let (albedo, normal) = self.trace_from(ray, first);
+        (albedo, normal, first)
+    }
+
+    fn trace_from(&self, ray: &Ray, first: Option<Hit>) -> (Vec3A, Vec3A) {
         let mut ray = *ray;
         let mut weight = Vec3A::ONE;
-        for _ in 0..=MAX_SPECULAR_CHAIN {
-            let hit = self.accel.intersect(&ray, f32::INFINITY);
+        for bounce in 0..=MAX_SPECULAR_CHAIN {
+            let hit = match bounce {
+                0 => first,
+                _ => self.accel.intersect(&ray, f32::INFINITY),
+            };
             let mut t_nearest = hit.map_or(f32::INFINITY, |h| h.t);
             let mut light = None;
             for (quad, colour) in &self.emitters {

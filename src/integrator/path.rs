@@ -46,6 +46,7 @@ use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
+use crate::geometry::Hit;
 use crate::math::{offset_ray_origin, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
 
@@ -163,6 +164,19 @@ impl<'a> PathTracer<'a> {
     /// Radiance arriving along `ray` toward its origin, from the path's own
     /// random stream.
     pub fn radiance(&self, ray: &Ray, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
+        self.radiance_from(ray, None, rng, counts)
+    }
+
+    /// [`radiance`](Self::radiance) with the nearest hit of `ray` already
+    /// found (`Some(hit)`, `hit` itself `None` for a miss), as the AOV
+    /// tracer finds it for the same camera ray.
+    pub fn radiance_from(
+        &self,
+        ray: &Ray,
+        mut first: Option<Option<Hit>>,
+        rng: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;
@@ -178,7 +192,10 @@ impl<'a> PathTracer<'a> {
         // Delta bounces since a map vertex sampled a non-delta direction.
         let mut since_map: Option<u32> = None;
         loop {
-            let hit = self.accel.intersect(&ray, f32::INFINITY);
+            let hit = match first.take() {
+                Some(hit) => hit,
+                None => self.accel.intersect(&ray, f32::INFINITY),
+            };
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
             // Emitters the camera sees directly, when the scene hides them.
             let hidden = depth == 0 && self.hide_emitters;

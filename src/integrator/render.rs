@@ -908,11 +908,14 @@ fn render_tile_pass(
             for k in first..target {
                 let (ray, mut rng) = samples.ray(k);
                 out.rays.camera += 1;
+                // The camera ray's hit, when the AOVs found it first.
+                let mut first = None;
                 if plan.aovs && buffers.aovs && k < AOV_SAMPLES {
                     // No random numbers: the sample below is unchanged.
-                    let (a, n) = aovs.trace(&ray);
+                    let (a, n, hit) = aovs.trace_keeping_hit(&ray);
                     albedo += a;
                     normal += n;
+                    first = Some(hit);
                 }
                 let l = match integrator {
                     Tracer::Whitted(whitted) => {
@@ -926,7 +929,7 @@ fn render_tile_pass(
                         };
                         whitted.radiance(&ray, 0, &mut ctx)
                     }
-                    Tracer::Path(path) => path.radiance(&ray, &mut rng, &mut out.rays),
+                    Tracer::Path(path) => path.radiance_from(&ray, first, &mut rng, &mut out.rays),
                     Tracer::Volume(path) => path.radiance(&ray, &mut rng, &mut out.rays),
                 };
                 out.samples += 1;

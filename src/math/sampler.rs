@@ -158,7 +158,7 @@ impl Sampler {
     }
 
     /// The next number in [0, 1).
-    #[inline]
+    #[inline(always)]
     pub fn f32(&mut self) -> f32 {
         match self.kind {
             SamplerKind::Independent => self.rng.f32(),
@@ -166,18 +166,28 @@ impl Sampler {
                 let d = self.dimension;
                 self.dimension += 1;
                 if d.is_multiple_of(4) {
-                    let (block, set) = (d / SOBOL_DIMENSIONS, (d % SOBOL_DIMENSIONS) / 4);
-                    self.batch = if block == 0 {
-                        sobol_4d(self.index_rev, set, self.seed)
-                    } else {
-                        // Later blocks of dimensions: independently scrambled sequences.
-                        let seed = mix64(self.seed as u64 ^ mix64(block as u64)) as u32;
-                        sobol_4d(shuffled_index_rev(self.index, seed), set, seed)
-                    };
+                    self.refill(d);
                 }
                 self.batch[(d % 4) as usize]
             }
         }
+    }
+
+    /// Computes dimensions `d .. d + 4` of the Sobol point (`d` a multiple
+    /// of 4). Out of line: three draws in four only read `batch`, and
+    /// inlining the scramble into every draw made each call save and
+    /// restore the registers it needs (callgrind: ≈ 30 instructions of
+    /// prologue and epilogue per draw).
+    #[inline(never)]
+    fn refill(&mut self, d: u32) {
+        let (block, set) = (d / SOBOL_DIMENSIONS, (d % SOBOL_DIMENSIONS) / 4);
+        self.batch = if block == 0 {
+            sobol_4d(self.index_rev, set, self.seed)
+        } else {
+            // Later blocks of dimensions: independently scrambled sequences.
+            let seed = mix64(self.seed as u64 ^ mix64(block as u64)) as u32;
+            sobol_4d(shuffled_index_rev(self.index, seed), set, seed)
+        };
     }
 
     /// The next two numbers.

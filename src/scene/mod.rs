@@ -338,22 +338,29 @@ impl Scene {
                 } else {
                     ng
                 };
-                let [t0, t1, t2] = mesh.corner_uvs(prim);
-                let uv = t0 * b0 + t1 * b1 + t2 * b2;
-                // ∂p/∂u and ∂p/∂v from the triangle's edges and UV
-                // differences (pbrt-v4 §6.5.3), any frame when degenerate.
-                let (duv02, duv12) = (t0 - t2, t1 - t2);
-                let (dp02, dp12) = (p0 - p2, p1 - p2);
-                let det = duv02.x * duv12.y - duv02.y * duv12.x;
-                let (dpdu, dpdv) = if det.abs() < 1e-12 {
-                    let f = crate::math::Frame::from_normal(ng_obj.normalize_or(Vec3A::Z));
-                    (f.to_world(Vec3A::X), f.to_world(Vec3A::Y))
+                // As on spheres: the parametrisation only when read (a
+                // frame and two transformed vectors per hit otherwise).
+                let (uv, dpdu, dpdv) = if wants_uv {
+                    let [t0, t1, t2] = mesh.corner_uvs(prim);
+                    let uv = t0 * b0 + t1 * b1 + t2 * b2;
+                    // ∂p/∂u and ∂p/∂v from the triangle's edges and UV
+                    // differences (pbrt-v4 §6.5.3), any frame when degenerate.
+                    let (duv02, duv12) = (t0 - t2, t1 - t2);
+                    let (dp02, dp12) = (p0 - p2, p1 - p2);
+                    let det = duv02.x * duv12.y - duv02.y * duv12.x;
+                    let (dpdu, dpdv) = if det.abs() < 1e-12 {
+                        let f = crate::math::Frame::from_normal(ng_obj.normalize_or(Vec3A::Z));
+                        (f.to_world(Vec3A::X), f.to_world(Vec3A::Y))
+                    } else {
+                        let inv = 1.0 / det;
+                        (
+                            (dp02 * duv12.y - dp12 * duv02.y) * inv,
+                            (dp12 * duv02.x - dp02 * duv12.x) * inv,
+                        )
+                    };
+                    (uv, transform.vector(dpdu), transform.vector(dpdv))
                 } else {
-                    let inv = 1.0 / det;
-                    (
-                        (dp02 * duv12.y - dp12 * duv02.y) * inv,
-                        (dp12 * duv02.x - dp02 * duv12.x) * inv,
-                    )
+                    (Vec2::ZERO, Vec3A::ZERO, Vec3A::ZERO)
                 };
                 if normal_map.is_some() && !mesh.tangents.is_empty() {
                     let t = |i: u32| mesh.tangents[i as usize];
@@ -367,8 +374,8 @@ impl Scene {
                     ng,
                     ns,
                     uv,
-                    transform.vector(dpdu),
-                    transform.vector(dpdv),
+                    dpdu,
+                    dpdv,
                 )
             }
         };
