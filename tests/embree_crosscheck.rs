@@ -17,7 +17,7 @@ use caustic::accel::embree::EmbreeAccel;
 use caustic::accel::{Accel, AccelOptions, TriangleTest};
 use caustic::analysis::crosscheck::{crosscheck, CrosscheckOptions, CrosscheckReport, RayKind};
 use caustic::math::{Ray, Vec3A};
-use caustic::scene::Scene;
+use caustic::scene::{Scene, Shape};
 use common::scenes::test_scene;
 
 fn run(scene: &Scene, options: &AccelOptions, rays: u64, seed: u64) -> CrosscheckReport {
@@ -99,6 +99,47 @@ fn instances_share_one_blas_per_mesh() {
         own += (e.instance as usize == k) as usize;
     }
     assert!(own >= 4, "only {own} of 6 instances hit from their centre");
+}
+
+/// A mesh that one object alone uses is in the top level, in world space
+/// (no instance), and still answers as the oracle does, object and
+/// primitive included.
+#[test]
+fn meshes_used_once_are_in_the_top_level() {
+    let mut scene = test_scene();
+    // "soup 1" and "ico 5" get meshes of their own (the same data under new
+    // indices): the first soup, the second and the last icosphere are then
+    // each the only user of their mesh; five icospheres share mesh 0.
+    for (name, source) in [("soup 1", 1usize), ("ico 5", 0)] {
+        let index = scene.meshes.len() as u32;
+        scene.meshes.push(scene.meshes[source].clone());
+        let object = scene.objects.iter_mut().find(|o| o.name == name).unwrap();
+        let Shape::Mesh { mesh, .. } = &mut object.shape else {
+            panic!("{name} is not a mesh")
+        };
+        *mesh = index;
+    }
+    let accel = EmbreeAccel::build(&scene, &AccelOptions::default()).unwrap();
+    let stats = accel.stats();
+    assert_eq!(stats.blas_count, 1, "only the shared icosphere is instanced");
+    let top = stats.details.iter().find(|(k, _)| k == "meshes in the top level");
+    assert_eq!(top.map(|(_, v)| v.as_str()), Some("3"), "{:?}", stats.details);
+    for robust in [false, true] {
+        let options = AccelOptions {
+            embree_robust: robust,
+            ..Default::default()
+        };
+        let report = run(&scene, &options, 40_000, 11);
+        assert_clean(&format!("top-level meshes, robust={robust}"), &report);
+    }
+    let brute = BruteForce::new(&scene, TriangleTest::Watertight);
+    let ico5 = scene.objects.iter().position(|o| o.name == "ico 5").unwrap();
+    let r = Ray::new(scene.object_bounds(ico5).center(), -Vec3A::Y);
+    let (e, b) = (
+        accel.intersect(&r, f32::INFINITY).unwrap(),
+        brute.intersect(&r, f32::INFINITY).unwrap(),
+    );
+    assert_eq!((e.instance, e.prim), (b.instance, b.prim));
 }
 
 #[test]

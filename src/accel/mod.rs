@@ -3,7 +3,8 @@
 //! Both real backends (Embree and the in-house KD-tree) are two-level: one
 //! bottom-level structure per distinct mesh, in object space, and a top level
 //! over the objects (mesh instances with their transforms, spheres, quads,
-//! disks, cylinders).
+//! disks, cylinders). Embree puts a mesh that only one object uses straight
+//! in its top level, in world space (one BVH fewer to traverse).
 //! `brute` tests everything and is the oracle of the tests.
 
 pub mod brute;
@@ -85,7 +86,8 @@ pub struct AccelStats {
     pub build_time: Duration,
     /// Bytes held by the acceleration structures (not counting the scene's meshes).
     pub memory_bytes: usize,
-    /// Bottom-level structures built (one per distinct mesh).
+    /// Bottom-level structures built (one per distinct mesh; Embree's only
+    /// for meshes that several objects use, the others are in its top level).
     pub blas_count: usize,
     /// Top-level entries (objects).
     pub instances: usize,

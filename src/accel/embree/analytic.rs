@@ -173,12 +173,13 @@ pub(super) unsafe extern "C" fn analytic_occluded<const MASKED: bool>(args: *con
 
 /// `RTCFilterFunctionN` of triangle geometries whose instances may have an
 /// alpha mask: rejects the hits that fall in a hole (for closest-hit and
-/// any-hit queries alike). The instance (the object) comes from the hit's
-/// `instID[0]`, so one BLAS shared by masked and unmasked objects works.
+/// any-hit queries alike). The object is the hit's `instID[0]` (so one
+/// BLAS shared by masked and unmasked objects works), or its `geomID` for a
+/// mesh attached straight to the top level.
 pub(super) unsafe extern "C" fn cutout_filter(args: *const sys::RTCFilterFunctionNArguments) {
     // SAFETY: Embree passes valid arguments: `valid` has `N` entries, `hit`
     // is an RTCHitN of `N` lanes (u at float 3N, v at 4N, primID at 5N,
-    // instID[0] at 7N), and `geometryUserPtr` is the `Cutouts` the BLAS
+    // geomID at 6N, instID[0] at 7N), and `geometryUserPtr` is the `Cutouts` the BLAS
     // geometry keeps alive.
     unsafe {
         let args = &*args;
@@ -191,7 +192,12 @@ pub(super) unsafe extern "C" fn cutout_filter(args: *const sys::RTCFilterFunctio
                 continue;
             }
             let (u, v) = (*hit.add(3 * n + i), *hit.add(4 * n + i));
-            let (prim, object) = (*ids.add(5 * n + i), *ids.add(7 * n + i));
+            let (prim, inst) = (*ids.add(5 * n + i), *ids.add(7 * n + i));
+            let object = if inst != sys::RTC_INVALID_GEOMETRY_ID {
+                inst
+            } else {
+                *ids.add(6 * n + i)
+            };
             if !cutouts.keeps_triangle(object, prim, u, v) {
                 *args.valid.add(i) = 0;
             }

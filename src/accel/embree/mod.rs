@@ -2,11 +2,14 @@
 //! hand-written FFI in [`sys`], and [`EmbreeAccel`], the two-level structure.
 //!
 //! Two levels, as in the KD-tree: one BLAS (an Embree scene holding one
-//! triangle geometry) per distinct mesh, in object space; a TLAS holding one
-//! instance geometry per mesh object (its `to_world` transform) and one user
-//! geometry per analytic sphere, quad, disk or cylinder. TLAS geometry IDs equal object
-//! indices (`rtcAttachGeometryByID`), so a hit maps to `Hit::instance`
-//! without a table.
+//! triangle geometry) per distinct mesh that several objects use, in object
+//! space; a TLAS holding one instance geometry per object of such a mesh
+//! (its `to_world` transform), the triangles of each mesh that only one
+//! object uses (in world space: a ray traverses one BVH instead of two and
+//! is not transformed), and one user geometry per analytic sphere, quad,
+//! disk or cylinder. TLAS geometry IDs equal object indices
+//! (`rtcAttachGeometryByID`), so a hit maps to `Hit::instance` without a
+//! table.
 //!
 //! Analytic shapes are user geometries whose callbacks call the scene's own
 //! [`Sphere::intersect`](crate::scene::Sphere::intersect),
@@ -108,29 +111,39 @@ impl EmbreeAccel {
                 }
             }
         }
-        // One BLAS per distinct mesh that some object uses.
-        let mut blas_of_mesh: Vec<Option<usize>> = vec![None; scene.meshes.len()];
-        let mut blas = Vec::new();
+        // How many objects use each mesh: one alone goes in the top level.
+        let mut users = vec![0usize; scene.meshes.len()];
         for object in &scene.objects {
             if let Shape::Mesh { mesh, .. } = &object.shape {
                 let index = *mesh as usize;
-                let Some(mesh_arc) = scene.meshes.get(index) else {
+                let Some(count) = users.get_mut(index) else {
                     return Err(AccelError::Scene(format!(
                         "object {} uses mesh {index}, but the scene has {} meshes",
                         object.name,
                         scene.meshes.len()
                     )));
                 };
-                if blas_of_mesh[index].is_none() {
+                *count += 1;
+            }
+        }
+        // One BLAS per distinct mesh that several objects use.
+        let mut blas_of_mesh: Vec<Option<usize>> = vec![None; scene.meshes.len()];
+        let mut blas = Vec::new();
+        for object in &scene.objects {
+            if let Shape::Mesh { mesh, .. } = &object.shape {
+                let index = *mesh as usize;
+                let mesh_arc = &scene.meshes[index];
+                if users[index] > 1 && blas_of_mesh[index].is_none() {
                     let mut bottom = Scene::new(&device, quality, options.embree_robust)?;
                     let filter = cutouts.as_ref().filter(|_| masked[index]);
-                    bottom.attach(Geometry::triangles(&device, mesh_arc, quality, filter)?, 0)?;
+                    bottom.attach(Geometry::triangles(&device, mesh_arc, None, quality, filter)?, 0)?;
                     blas_of_mesh[index] = Some(blas.len());
                     blas.push(bottom.commit()?);
                 }
             }
         }
         let mut top = Scene::new(&device, quality, options.embree_robust)?;
+        let mut flattened = 0usize;
         for (id, object) in scene.objects.iter().enumerate() {
             let analytic = |shape| {
                 let object = id as u32;
@@ -142,10 +155,15 @@ impl EmbreeAccel {
                 Shape::Quad(q) => analytic(AnalyticShape::Quad(*q))?,
                 Shape::Disk(d) => analytic(AnalyticShape::Disk(*d))?,
                 Shape::Cylinder(c) => analytic(AnalyticShape::Cylinder(*c))?,
-                Shape::Mesh { mesh, transform, .. } => {
-                    let b = blas_of_mesh[*mesh as usize].expect("BLAS built above for every used mesh");
-                    Geometry::instance(&device, &blas[b], &transform.to_world)?
-                }
+                Shape::Mesh { mesh, transform, .. } => match blas_of_mesh[*mesh as usize] {
+                    Some(b) => Geometry::instance(&device, &blas[b], &transform.to_world)?,
+                    None => {
+                        let filter = cutouts.as_ref().filter(|c| c.has(id as u32));
+                        let to_world = (!transform.is_identity()).then_some(&transform.to_world);
+                        flattened += 1;
+                        Geometry::triangles(&device, &scene.meshes[*mesh as usize], to_world, quality, filter)?
+                    }
+                },
             };
             top.attach(geometry, id as u32)?;
         }
@@ -172,6 +190,7 @@ impl EmbreeAccel {
                 ("source".into(), source().into()),
                 ("quality".into(), options.embree_quality.clone()),
                 ("robust".into(), options.embree_robust.to_string()),
+                ("meshes in the top level".into(), flattened.to_string()),
                 ("peak build memory".into(), format!("{peak} bytes")),
             ],
         };

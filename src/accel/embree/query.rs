@@ -134,16 +134,18 @@ fn make_ray(ray: &Ray, t_max: f32) -> Option<sys::RTCRay> {
     })
 }
 
-/// The [`Hit`] of an Embree hit record: a mesh hit is reported through its
-/// instance (the TLAS geometry ID of the object), an analytic shape by its
-/// own geometry ID (no enclosing instance, primitive 0).
+/// The [`Hit`] of an Embree hit record: an instanced mesh's hit is reported
+/// through its instance (the TLAS geometry ID of the object); a mesh in the
+/// top level and an analytic shape (one primitive, ID 0) by their own
+/// geometry ID.
 #[inline]
 pub(super) fn hit_record(t: f32, geom_id: u32, prim_id: u32, inst_id: u32, u: f32, v: f32) -> Hit {
-    let (instance, prim) = if inst_id != sys::RTC_INVALID_GEOMETRY_ID {
-        (inst_id, prim_id)
+    let instance = if inst_id != sys::RTC_INVALID_GEOMETRY_ID {
+        inst_id
     } else {
-        (geom_id, 0)
+        geom_id
     };
+    let prim = prim_id;
     Hit {
         t,
         instance,
@@ -179,7 +181,7 @@ mod tests {
         );
         let mut blas = Scene::new(&device, sys::RTC_BUILD_QUALITY_HIGH, false).unwrap();
         blas.attach(
-            Geometry::triangles(&device, &mesh, sys::RTC_BUILD_QUALITY_HIGH, None).unwrap(),
+            Geometry::triangles(&device, &mesh, None, sys::RTC_BUILD_QUALITY_HIGH, None).unwrap(),
             0,
         )
         .unwrap();

@@ -6,7 +6,7 @@ use super::analytic::{analytic_bounds, analytic_intersect, analytic_occluded, cu
 use super::device::{Device, DeviceInner};
 use super::sys;
 use crate::accel::AccelError;
-use crate::math::Affine3A;
+use crate::math::{Affine3A, Vec3};
 use crate::scene::{Cutouts, Mesh};
 use std::ffi::c_void;
 use std::sync::Arc;
@@ -72,11 +72,18 @@ impl Geometry {
     /// primitive with a non-finite vertex), so primitive IDs stay the mesh's
     /// triangle indices.
     ///
+    /// With `to_world`, the vertices are placed in world space (a mesh that
+    /// only one object uses, attached straight to the top level: no
+    /// instance to traverse); barycentrics and primitive IDs are those of
+    /// the object-space triangles, as an affine map keeps them. A triangle
+    /// of zero area on either side is left out.
+    ///
     /// With `cutouts`, hits are filtered through the objects' alpha masks
     /// (an intersection filter for both query kinds).
     pub fn triangles(
         device: &Device,
         mesh: &Arc<Mesh>,
+        to_world: Option<&Affine3A>,
         quality: sys::RTCBuildQuality,
         cutouts: Option<&Arc<Cutouts>>,
     ) -> Result<Self, AccelError> {
@@ -88,7 +95,15 @@ impl Geometry {
                 "mesh {name}: {tri_count} triangles / {vertex_count} vertices exceed Embree's 32-bit indices"
             )));
         }
-        let degenerate = zero_area_triangles(mesh);
+        let world: Option<Vec<Vec3>> =
+            to_world.map(|m| mesh.positions.iter().map(|&p| m.transform_point3(p)).collect());
+        let mut degenerate = zero_area_triangles(mesh, &mesh.positions);
+        if let Some(world) = &world {
+            degenerate.extend(zero_area_triangles(mesh, world));
+            degenerate.sort_unstable();
+            degenerate.dedup();
+        }
+        let positions = world.as_deref().unwrap_or(&mesh.positions);
         // One extra vertex, never finite, for the zero-area triangles.
         let buffer_vertices = vertex_count + usize::from(!degenerate.is_empty());
         let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_TRIANGLE)?;
@@ -111,7 +126,7 @@ impl Geometry {
         // SAFETY: `dst` holds `3 * buffer_vertices` floats (checked non-null),
         // and `Vec3` is three packed f32 (glam's `#[repr(C)]` Vec3).
         unsafe {
-            std::ptr::copy_nonoverlapping(mesh.positions.as_ptr() as *const f32, dst, 3 * vertex_count);
+            std::ptr::copy_nonoverlapping(positions.as_ptr() as *const f32, dst, 3 * vertex_count);
             if buffer_vertices > vertex_count {
                 std::ptr::copy_nonoverlapping([f32::NAN; 3].as_ptr(), dst.add(3 * vertex_count), 3);
             }
@@ -325,15 +340,18 @@ pub struct CommittedScene {
     pub(super) inner: Arc<SceneHandle>,
 }
 
-/// Indices of the triangles of `mesh` whose area is exactly zero: corners
-/// collinear in f64 (products of f32 values are exact there).
-fn zero_area_triangles(mesh: &Mesh) -> Vec<u32> {
-    (0..mesh.triangles.len())
-        .filter(|&i| {
-            let [a, b, c] = mesh.corners(i).map(|v| v.as_dvec3());
+/// Indices of the triangles of `mesh` whose area is exactly zero with the
+/// vertex positions `positions`: corners collinear in f64 (products of f32
+/// values are exact there).
+fn zero_area_triangles(mesh: &Mesh, positions: &[Vec3]) -> Vec<u32> {
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| {
+            let [a, b, c] = t.map(|v| positions[v as usize].as_dvec3());
             (b - a).cross(c - a) == glam::DVec3::ZERO
         })
-        .map(|i| i as u32)
+        .map(|(i, _)| i as u32)
         .collect()
 }
 
