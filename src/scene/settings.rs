@@ -120,10 +120,10 @@ pub struct RenderSettings {
     pub hide_emitters: bool,
     /// Denoise the final image with Open Image Denoise (`[render] denoise`,
     /// `--denoise`): what is written, not what is sampled (not in the
-    /// fingerprint). Kept last but one: the fingerprint relies on it.
+    /// fingerprint).
     pub denoise: bool,
     /// The denoising filter's quality (`[render] denoise_quality`,
-    /// `--denoise-quality`; not in the fingerprint). Kept last.
+    /// `--denoise-quality`; not in the fingerprint).
     pub denoise_quality: DenoiseQuality,
 }
 
