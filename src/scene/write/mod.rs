@@ -1,5 +1,6 @@
-//! A [`Scene`] written as caustic's TOML (`caustic convert`): whatever
-//! front end read it, the file written loads back to the same scene.
+//! A [`LoadedScene`] (a scene and its settings) written as caustic's TOML
+//! (`caustic convert`): whatever front end read it, the file written loads
+//! back to the same scene.
 //!
 //! Each kind of thing has one function that writes it: `settings` the
 //! `[render]`, `[photons]` and `[camera]` tables, `materials` the materials
