@@ -110,7 +110,7 @@ impl<'a> PathTracer<'a> {
             max_depth: plan.max_depth,
             gather,
             caustics: None,
-            caustic_depth: plan.photon_trace.max_depth.unwrap_or(PHOTON_PATH_DEPTH),
+            caustic_depth: plan.photon_trace().max_depth.unwrap_or(PHOTON_PATH_DEPTH),
             water: match plan.medium {
                 MediumPlan::Run { .. } => WaterVolume::of(scene),
                 _ => None,

@@ -242,8 +242,6 @@ pub struct RenderPlan {
     /// How the photons scatter: the Whitted integrator's rules, or the path
     /// integrator's BSDFs and medium (`[photons] caustics = "map"`).
     pub photon_rules: PhotonRules,
-    /// The photon paths' seed and bounce limit.
-    pub photon_trace: TraceSettings,
     /// The path integrator's participating medium in the water.
     pub medium: MediumPlan,
     /// Fog.
@@ -440,7 +438,6 @@ impl RenderPlan {
             } else {
                 PhotonRules::Whitted
             },
-            photon_trace: TraceSettings::of(s),
             medium,
             fog,
             keep_photon_positions: false,
@@ -455,6 +452,16 @@ impl RenderPlan {
         crate::film::Buffers {
             noise: self.noise || self.adaptive.is_some(),
             aovs: self.aovs,
+        }
+    }
+
+    /// The photon paths' seed and bounce limit: the settings' `max_depth`,
+    /// which [`max_depth`](Self::max_depth) holds resolved (`u32::MAX` for
+    /// none).
+    pub fn photon_trace(&self) -> TraceSettings {
+        TraceSettings {
+            seed: self.seed,
+            max_depth: (self.max_depth != u32::MAX).then_some(self.max_depth),
         }
     }
 

@@ -208,7 +208,7 @@ pub fn photon_pass_for(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> O
     let (count, precompute) = photon_work(plan)?;
     Some(photon_pass_with(
         scene,
-        plan.photon_trace,
+        plan.photon_trace(),
         accel,
         count,
         precompute.as_ref(),
@@ -265,7 +265,7 @@ pub fn progressive_schedule(plan: &RenderPlan) -> Option<ProgressiveSchedule> {
             cone_k,
             keep_positions: plan.keep_photon_positions,
             rules: plan.photon_rules,
-            settings: plan.photon_trace,
+            settings: plan.photon_trace(),
         }),
         _ => None,
     }

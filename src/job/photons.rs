@@ -81,7 +81,7 @@ pub fn trace_to_file(request: &PhotonsRequest) -> Result<PhotonsReport, JobError
     };
     film::check_writable(&request.output)?;
     let accel = accel::build(&scene, accel_kind, &options)?;
-    let traced = trace_photons(&scene, plan.photon_trace, accel.as_ref(), count, true);
+    let traced = trace_photons(&scene, plan.photon_trace(), accel.as_ref(), count, true);
     let fingerprint = photon_fingerprint(&scene, &settings, accel_kind, &options.fingerprint_text(accel_kind));
     let begin = Instant::now();
     write_photons(&request.output, &traced, &fingerprint)?;
