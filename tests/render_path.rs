@@ -140,11 +140,10 @@ fn every_scene_renders_in_path_mode() {
         // Under water every light path crosses the smooth water surface
         // (light → specular → diffuse): the scene's photon map lights it.
         // A scene of glass alone has nothing diffuse to light.
-        let diffuse = scene
-            .scene
-            .objects
-            .iter()
-            .any(|o| scene.scene.materials[o.material as usize].is_diffuse());
+        let diffuse = scene.scene.objects.iter().any(|o| {
+            caustic::bsdf::material_flags(&scene.scene.materials[o.material as usize])
+                .contains(caustic::bsdf::LobeFlags::DIFFUSE)
+        });
         if !diffuse {
             continue;
         }

@@ -142,7 +142,10 @@ fn every_documented_key_is_parsed() {
     let d = glass.dielectric.unwrap();
     assert_eq!(d.ior, 1.33);
     assert!(close(d.tint, Vec3A::new(0.9, 1.0, 1.0)));
-    assert!(glass.is_specular() && !glass.is_diffuse());
+    let flags = caustic::bsdf::whitted_flags(glass);
+    assert!(
+        flags.contains(caustic::bsdf::LobeFlags::CASTS_CAUSTICS) && !flags.contains(caustic::bsdf::LobeFlags::DIFFUSE)
+    );
 
     match &s.scene.lights[0] {
         Light::Point { position, intensity } => {

@@ -33,6 +33,12 @@ impl LobeFlags {
     /// Light continues unchanged (a `null` surface, a blend's hole): no
     /// scattering at all, so neither specular nor a transmission lobe.
     pub const PASS_THROUGH: Self = Self(32);
+    /// A delta lobe that carries the surface's own reflection or
+    /// transmission (a mirror, smooth glass, a smooth metal), as opposed to
+    /// a smooth coat's Fresnel reflection over a base: it focuses light into
+    /// caustics, so Whitted's photons are aimed at it (the original
+    /// report's casters). Always set with [`Self::SPECULAR`].
+    pub const CASTS_CAUSTICS: Self = Self(64);
 
     /// Every flag of `other` is set.
     #[inline]
@@ -71,6 +77,12 @@ impl LobeFlags {
         self.contains(Self::TRANSMISSION)
     }
 
+    /// These flags without those of `other`.
+    #[inline]
+    pub const fn without(self, other: Self) -> Self {
+        Self(self.0 & !other.0)
+    }
+
     /// Both sets.
     #[inline]
     pub const fn union(self, other: Self) -> Self {
@@ -86,6 +98,7 @@ impl LobeFlags {
             (Self::GLOSSY, "glossy"),
             (Self::SPECULAR, "specular"),
             (Self::PASS_THROUGH, "pass-through"),
+            (Self::CASTS_CAUSTICS, "casts-caustics"),
         ];
         let set: Vec<&str> = names
             .iter()
@@ -120,12 +133,22 @@ impl std::ops::BitOrAssign for LobeFlags {
 /// somewhere (specular) and rough elsewhere (glossy): conservative, never
 /// missing a lobe a shading point can have.
 pub fn material_flags(m: &Material) -> LobeFlags {
+    flags_over_range(m, &|m: &Material| {
+        super::Bsdf::for_material(m, super::FresnelModel::Exact, super::Transport::Radiance).flags()
+    })
+}
+
+/// The union of `flags` (the lobe flags of one untextured material) over
+/// everything `m` can be: each side of a blend (a hole is pass-through),
+/// each textured parameter at the ends of its range.
+pub fn flags_over_range(m: &Material, flags: &dyn Fn(&Material) -> LobeFlags) -> LobeFlags {
     if let Some(b) = m.blend.as_deref() {
-        let side = |s: &Option<Material>| s.as_ref().map_or(LobeFlags::PASS_THROUGH, material_flags);
+        let side = |s: &Option<Material>| {
+            s.as_ref()
+                .map_or(LobeFlags::PASS_THROUGH, |m| flags_over_range(m, flags))
+        };
         return side(&b.first) | side(&b.second);
     }
-    let flags =
-        |m: &Material| super::Bsdf::for_material(m, super::FresnelModel::Exact, super::Transport::Radiance).flags();
     let Some(t) = m.textures.as_deref().filter(|t| t.has_values()) else {
         return flags(m);
     };
@@ -458,7 +481,7 @@ mod tests {
         let textured = material_flags(&rough_metal(checker));
         assert_eq!(
             textured,
-            LobeFlags::GLOSSY | LobeFlags::SPECULAR | LobeFlags::REFLECTION,
+            LobeFlags::GLOSSY | LobeFlags::SPECULAR | LobeFlags::CASTS_CAUSTICS | LobeFlags::REFLECTION,
             "{}",
             textured.names()
         );

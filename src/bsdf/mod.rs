@@ -32,10 +32,12 @@ pub mod plastic;
 pub mod principled;
 pub mod rough_plastic;
 pub mod specular;
+pub mod whitted;
 
 pub use crate::scene::FresnelModel;
-pub use flags::{material_flags, LobeFlags};
+pub use flags::{flags_over_range, material_flags, LobeFlags};
 pub use specular::{fresnel_schlick, reflect, refract, DielectricInterface};
+pub use whitted::{whitted_flags, WhittedKind, WhittedSurface};
 
 use crate::math::{Vec2, Vec3A};
 use crate::scene::Material;
@@ -222,17 +224,28 @@ impl Lobe<'_> {
         match self {
             Lobe::Lambert(_) => F::DIFFUSE | F::REFLECTION,
             Lobe::Highlight(_) => F::GLOSSY | F::REFLECTION,
-            Lobe::Mirror(_) | Lobe::SmoothConductor(_) => F::SPECULAR | F::REFLECTION,
-            Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) => F::SPECULAR | F::REFLECTION | F::TRANSMISSION,
+            Lobe::Mirror(_) | Lobe::SmoothConductor(_) => F::SPECULAR | F::CASTS_CAUSTICS | F::REFLECTION,
+            Lobe::SmoothDielectric(_) | Lobe::ThinDielectric(_) => {
+                F::SPECULAR | F::CASTS_CAUSTICS | F::REFLECTION | F::TRANSMISSION
+            }
             Lobe::RoughDielectric(_) => F::GLOSSY | F::REFLECTION | F::TRANSMISSION,
             Lobe::RoughConductor(_) => F::GLOSSY | F::REFLECTION,
-            Lobe::Plastic(_) => F::DIFFUSE | F::SPECULAR | F::REFLECTION,
-            Lobe::RoughPlastic(_) => F::DIFFUSE | F::GLOSSY | F::REFLECTION,
+            Lobe::Plastic(p) => F::SPECULAR | F::REFLECTION | base_flags(p.kd),
+            Lobe::RoughPlastic(p) => F::GLOSSY | F::REFLECTION | base_flags(p.base),
             Lobe::Principled(p) => p.flags(),
             Lobe::Disney(d) => d.flags(),
             Lobe::DisneyThin(d) => d.flags(),
             Lobe::Null(_) => F::PASS_THROUGH,
         }
+    }
+}
+
+/// A coat's base: diffuse unless it is black (then the coat alone reflects).
+fn base_flags(albedo: Vec3A) -> LobeFlags {
+    if albedo.max_element() > 0.0 {
+        LobeFlags::DIFFUSE
+    } else {
+        LobeFlags::NONE
     }
 }
 

@@ -251,10 +251,14 @@ impl Principled {
         }
         // The specular layer (metal, dielectric reflection and transmission)
         // is a delta when smooth, else microfacets.
-        f |= if self.microfacet.is_none() {
-            F::SPECULAR
-        } else {
+        f |= if self.microfacet.is_some() {
             F::GLOSSY
+        } else if self.metallic > 0.0 || self.transmission > 0.0 {
+            // Smooth metal or glass: the layer is the body's own reflection.
+            F::SPECULAR | F::CASTS_CAUSTICS
+        } else {
+            // A smooth dielectric layer over the diffuse base: a coat.
+            F::SPECULAR
         };
         if self.clearcoat > 0.0 {
             f |= if self.coat_microfacet.is_none() {

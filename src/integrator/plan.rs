@@ -9,7 +9,7 @@
 //! output.
 
 use super::photon::{PhotonRules, TraceSettings};
-use crate::bsdf::material_flags;
+use crate::bsdf::{material_flags, whitted_flags, LobeFlags};
 use crate::math::SamplerKind;
 use crate::scene::{
     AdaptiveGoal, CausticsMode, GatherMode, IntegratorKind, Light, RenderSettings, SampleSharing, Scene,
@@ -325,16 +325,19 @@ impl RenderPlan {
         let mut dielectric_objects = 0;
         for o in &scene.objects {
             let m = &scene.materials[o.material as usize];
-            if m.is_specular() {
+            // Whitted's model of the material (a rough dielectric is one
+            // smooth interface there) and its BSDF's.
+            let whitted = whitted_flags(m);
+            if whitted.contains(LobeFlags::CASTS_CAUSTICS) {
                 specular_objects += 1;
             }
             if material_flags(m).is_specular() {
                 delta_objects += 1;
             }
-            if m.spawns_secondary() {
+            if whitted.intersects(LobeFlags::SPECULAR | LobeFlags::PASS_THROUGH) {
                 secondary_objects += 1;
             }
-            if m.dielectric.is_some() {
+            if whitted.contains(LobeFlags::SPECULAR | LobeFlags::TRANSMISSION) {
                 dielectric_objects += 1;
             }
         }

@@ -47,7 +47,7 @@ use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use crate::accel::Accel;
 use crate::bsdf::phong;
 use crate::bsdf::specular::{reflect, DielectricInterface};
-use crate::bsdf::{Bsdf, FresnelModel, Transport};
+use crate::bsdf::{Bsdf, FresnelModel, LobeFlags, WhittedKind, WhittedSurface};
 use crate::math::sampling::{stratified, stratum_order};
 use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
 use crate::scene::light::{bounding_sphere, Emitter, EnvironmentMap};
@@ -262,29 +262,28 @@ impl<'a> Whitted<'a> {
         } else {
             Vec3A::ZERO
         };
-        if m.blend.is_none() && !m.null {
+        if m.blend.is_none() {
             return emitted + self.scatter(ray, &si, m, depth, ctx);
         }
-        // A blend scatters as one of its sides; a hole or a null surface
-        // lets the ray through.
-        match m.resolve(si.uv, || ctx.rng.f32()).filter(|side| !side.null) {
+        // A blend scatters as one of its sides; a hole lets the ray through.
+        match m.resolve(si.uv, || ctx.rng.f32()) {
             Some(side) => emitted + self.scatter(ray, &si, &side, depth, ctx),
-            None if self.can_bounce(depth) => emitted + self.trace_secondary(&si, ray.dir, depth, ctx),
-            None => emitted,
+            None => emitted + self.trace_on(&si, ray.dir, depth, ctx),
         }
     }
 
     /// Radiance the surface at `si` reflects or transmits toward the ray's origin.
     fn scatter(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = *si;
-        if let Some(d) = m.dielectric {
-            return self.dielectric(ray, &si, m, d, depth, ctx);
-        }
-        if m.conductor.is_some() || m.coating.is_some() || m.principled.is_some() {
-            return self.layered(ray, &si, m, depth, ctx);
-        }
-        let local = self.direct(ray, &si, m, Local::Surface, ctx);
-        match m.mirror {
+        let surface = WhittedSurface::of(m);
+        let mirror = match surface.kind {
+            WhittedKind::Dielectric(d) => return self.dielectric(ray, &si, m, d, depth, ctx),
+            WhittedKind::Layered { bsdf, .. } => return self.layered(ray, &si, m, &bsdf, surface.flags, depth, ctx),
+            WhittedKind::PassThrough => return self.trace_on(&si, ray.dir, depth, ctx),
+            WhittedKind::Phong { mirror } => mirror,
+        };
+        let local = self.direct(ray, &si, m, Local::Surface, surface.flags, ctx);
+        match mirror {
             Some(mirror) if mirror.reflectivity > 0.0 => {
                 let r = mirror.reflectivity;
                 let reflected = if self.can_bounce(depth) {
@@ -305,6 +304,16 @@ impl<'a> Whitted<'a> {
         }
     }
 
+    /// The ray continuing unchanged through a surface that lets it pass
+    /// (a hole, a `null` surface); black beyond the depth limit.
+    fn trace_on(&self, si: &SurfaceInteraction, dir: Vec3A, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+        if self.can_bounce(depth) {
+            self.trace_secondary(si, dir, depth, ctx)
+        } else {
+            Vec3A::ZERO
+        }
+    }
+
     fn can_bounce(&self, depth: u32) -> bool {
         self.plan.traces_secondary() && depth < self.plan.max_depth
     }
@@ -320,7 +329,15 @@ impl<'a> Whitted<'a> {
     /// shadow rays. `highlights_only` (dielectrics) keeps only the specular
     /// lobe of point lights, the one light a reflected ray can never find
     /// (area lights appear in the reflection itself).
-    fn direct(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, local: Local, ctx: &mut SampleContext) -> Vec3A {
+    fn direct(
+        &self,
+        ray: &Ray,
+        si: &SurfaceInteraction,
+        m: &Material,
+        local: Local,
+        flags: LobeFlags,
+        ctx: &mut SampleContext,
+    ) -> Vec3A {
         let highlights_only = matches!(local, Local::Highlights);
         let wo = -ray.dir;
         let (ng, ns) = facing(si, wo);
@@ -437,7 +454,7 @@ impl<'a> Whitted<'a> {
                 }
             }
         }
-        if !highlights_only && m.is_diffuse() {
+        if !highlights_only && flags.contains(LobeFlags::DIFFUSE) {
             if let Some((map, g)) = &self.caustics {
                 out += m.diffuse * (1.0 / PI) * map.caustic_irradiance_cached(si.p, ng, g, ctx.sites);
             }
@@ -511,9 +528,18 @@ impl<'a> Whitted<'a> {
     /// and, when it has one, the mirror reflection weighted by its Fresnel
     /// reflectance (a rough metal or coating shows no reflection in this
     /// model).
-    fn layered(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
-        let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
-        let local = self.direct(ray, si, m, Local::Bsdf(&bsdf), ctx);
+    #[allow(clippy::too_many_arguments)]
+    fn layered(
+        &self,
+        ray: &Ray,
+        si: &SurfaceInteraction,
+        m: &Material,
+        bsdf: &Bsdf,
+        flags: LobeFlags,
+        depth: u32,
+        ctx: &mut SampleContext,
+    ) -> Vec3A {
+        let local = self.direct(ray, si, m, Local::Bsdf(bsdf), flags, ctx);
         let (_, ns) = facing(si, -ray.dir);
         let wo = bsdf.frame(ns, si.dpdu).to_local(-ray.dir);
         let weight = bsdf.delta_reflectance(wo);
@@ -541,7 +567,7 @@ impl<'a> Whitted<'a> {
         depth: u32,
         ctx: &mut SampleContext,
     ) -> Vec3A {
-        let highlight = self.direct(ray, si, m, Local::Highlights, ctx);
+        let highlight = self.direct(ray, si, m, Local::Highlights, LobeFlags::NONE, ctx);
         if !self.can_bounce(depth) {
             return highlight;
         }

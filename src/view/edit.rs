@@ -1,20 +1,17 @@
 //! The scene as the viewer edits it: the loaded [`Scene`], the orbit camera,
 //! each light's colour and intensity kept apart (the scene stores their
-//! product), and, for a caustic TOML file, its document, into which edits
-//! are written back with their comments and layout kept. A scene of another
-//! format (Mitsuba XML) is saved as caustic TOML by the writer of
-//! `caustic convert` ([`crate::scene::write`]).
+//! product), and, for a caustic TOML file, its document. Saving goes
+//! through the scene's writers ([`crate::scene::write`]): a TOML file gets
+//! the edits written into its document, comments and layout kept
+//! ([`TomlDocument`]); a scene of another format (Mitsuba XML, glTF) is
+//! written whole as caustic TOML, as `caustic convert` writes it.
 
 use super::orbit::Orbit;
-use crate::film::output::write_atomically;
-use crate::film::OutputError;
+use crate::bsdf::{whitted_flags, LobeFlags};
 use crate::math::Vec3A;
-use crate::scene::{
-    self, IntegratorKind, Light, LoadedScene, Material, Projection, RenderSettings, Scene, SceneError, ShadingModel,
-};
-use std::io::Write;
+use crate::scene::write::{CameraFraming, LightSplit, TomlDocument};
+use crate::scene::{self, IntegratorKind, Light, LoadedScene, Projection, RenderSettings, Scene, SceneError};
 use std::path::{Path, PathBuf};
-use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
 
 /// A light's parameters as the panel shows them.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,7 +47,7 @@ pub struct EditableScene {
     pub lights: Vec<LightEdit>,
     /// The TOML document of the file; `None` when the scene was read from
     /// another format.
-    doc: Option<DocumentMut>,
+    doc: Option<TomlDocument>,
     /// The file's orthographic half width and half height, which the orbit
     /// scales together (its zoom), so that the rectangle still fits the
     /// viewer's image whatever its aspect ratio.
@@ -60,9 +57,6 @@ pub struct EditableScene {
 /// Why the viewer could not save.
 #[derive(Debug, thiserror::Error)]
 pub enum SaveError {
-    /// The file could not be written.
-    #[error("{0}")]
-    Output(#[from] OutputError),
     /// The scene could not be written as TOML.
     #[error("{0}")]
     Convert(#[from] crate::scene::write::WriteError),
@@ -71,70 +65,9 @@ pub enum SaveError {
     NotToml(PathBuf),
 }
 
-/// A number of a TOML array or value, integer or float.
-fn number(v: &Value) -> Option<f64> {
-    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
-}
-
-fn vec3_of(item: Option<&Item>) -> Option<Vec3A> {
-    let a = item?.as_array()?;
-    if a.len() != 3 {
-        return None;
-    }
-    let x: Vec<f64> = a.iter().filter_map(number).collect();
-    (x.len() == 3).then(|| Vec3A::new(x[0] as f32, x[1] as f32, x[2] as f32))
-}
-
-fn number_of(item: Option<&Item>) -> Option<f32> {
-    item?.as_value().and_then(number).map(|x| x as f32)
-}
-
 /// Half the vertical field of view of the frustum an orthographic camera's
 /// orbit starts with, when the file names no point looked at.
 const ORTHOGRAPHIC_ORBIT_HALF_FOV_DEG: f32 = 20.0;
-
-/// The shortest decimal that reads back as `x` through the scene loader
-/// (which parses an f64 and rounds it to f32).
-fn toml_number(x: f32) -> Value {
-    let short: f64 = format!("{x}").parse().unwrap_or(x as f64);
-    if short as f32 == x {
-        Value::from(short)
-    } else {
-        Value::from(x as f64)
-    }
-}
-
-fn toml_vec3(v: Vec3A) -> Item {
-    let mut a = Array::new();
-    for x in v.to_array() {
-        a.push(toml_number(x));
-    }
-    value(a)
-}
-
-/// The table at `key` of `table` (standard or inline), created as a
-/// standard table if missing.
-fn table_mut<'t>(table: &'t mut dyn TableLike, key: &str) -> &'t mut dyn TableLike {
-    if !table.contains_key(key) {
-        let mut t = Table::new();
-        t.set_implicit(false);
-        table.insert(key, Item::Table(t));
-    }
-    table
-        .get_mut(key)
-        .and_then(Item::as_table_like_mut)
-        .expect("a table (checked by the loader)")
-}
-
-/// Sets `key` of `table` to `item`, keeping its place when it exists.
-fn set(table: &mut dyn TableLike, key: &str, item: Item) {
-    match table.get_mut(key) {
-        Some(slot) => *slot = item,
-        None => {
-            table.insert(key, item);
-        }
-    }
-}
 
 impl EditableScene {
     /// Loads `path` (validated like `caustic render` does).
@@ -147,26 +80,18 @@ impl EditableScene {
     pub fn open_with(path: &Path, options: &scene::LoadOptions) -> Result<Self, SceneError> {
         // The loader checks size, encoding and every value first.
         let loaded = scene::load_scene_options(path, options)?;
-        if !scene::is_toml_path(path) {
-            return Ok(Self::from_parts(path, loaded, None));
-        }
-        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        let doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| SceneError::Toml {
-            path: path.to_path_buf(),
-            place: None,
-            message: e.message().to_string(),
-        })?;
-        Ok(Self::from_parts(path, loaded, Some(doc)))
+        let doc = if scene::is_toml_path(path) {
+            Some(TomlDocument::read(path)?)
+        } else {
+            None
+        };
+        Ok(Self::from_parts(path, loaded, doc))
     }
 
-    fn from_parts(path: &Path, loaded: LoadedScene, doc: Option<DocumentMut>) -> Self {
+    fn from_parts(path: &Path, loaded: LoadedScene, doc: Option<TomlDocument>) -> Self {
         let LoadedScene { scene, settings } = loaded;
         let cam = &scene.camera;
         let scene_projection = cam.projection;
-        let camera_table = doc.as_ref().and_then(|d| d.get("camera"));
         let s = &settings;
         let aspect = s.width as f32 / s.height as f32;
         // An orthographic camera orbits a target placed where a 40° frustum
@@ -177,9 +102,14 @@ impl EditableScene {
         } else {
             1.0
         };
-        let target = vec3_of(camera_table.and_then(|c| c.get("look_at"))).unwrap_or(cam.position + cam.forward * ahead);
-        let up =
-            vec3_of(camera_table.and_then(|c| c.get("up"))).unwrap_or(if doc.is_some() { Vec3A::Y } else { cam.up });
+        let target = doc
+            .as_ref()
+            .and_then(|d| d.camera_vec3("look_at"))
+            .unwrap_or(cam.position + cam.forward * ahead);
+        let up = doc
+            .as_ref()
+            .and_then(|d| d.camera_vec3("up"))
+            .unwrap_or(if doc.is_some() { Vec3A::Y } else { cam.up });
         // The orbit keeps a vertical field of view: the file's, whatever axis
         // it spans; for an orthographic camera, the one whose frustum spans
         // the image height at the target (zooming then scales the image).
@@ -191,22 +121,22 @@ impl EditableScene {
         let orbit = Orbit::looking_at(cam.position, target, up, vfov)
             .or_else(|| Orbit::looking_at(cam.position, cam.position + cam.forward, cam.up, vfov))
             .expect("a valid camera has a view direction");
-        let light_tables = doc
-            .as_ref()
-            .and_then(|d| d.get("lights"))
-            .and_then(|l| l.as_array_of_tables());
         let lights = scene
             .lights
             .iter()
             .enumerate()
             .map(|(i, light)| {
-                let t = light_tables.and_then(|a| a.get(i));
+                let keys = doc.as_ref().and_then(|d| d.light_keys(i));
                 // Without the file's split, the colour is the light's own
                 // product and the intensity 1.
-                let colour = t
-                    .and_then(|t| vec3_of(t.get("colour").or_else(|| t.get("color"))))
-                    .unwrap_or_else(|| if t.is_some() { Vec3A::ONE } else { light_power(light) });
-                let intensity = t.and_then(|t| number_of(t.get("intensity"))).unwrap_or(1.0);
+                let colour = keys.and_then(|k| k.colour).unwrap_or_else(|| {
+                    if keys.is_some() {
+                        Vec3A::ONE
+                    } else {
+                        light_power(light)
+                    }
+                });
+                let intensity = keys.and_then(|k| k.intensity).unwrap_or(1.0);
                 let position = light.position().unwrap_or(Vec3A::ZERO);
                 let samples = match light {
                     Light::Area(a) => a.samples,
@@ -217,7 +147,7 @@ impl EditableScene {
                     colour,
                     intensity,
                     samples,
-                    look_at: t.and_then(|t| vec3_of(t.get("look_at"))),
+                    look_at: keys.and_then(|k| k.look_at),
                 }
             })
             .collect();
@@ -314,102 +244,56 @@ impl EditableScene {
     /// The scene file's text with every edit written in (`None` for a
     /// scene read from another format).
     pub fn to_toml(&self) -> Option<String> {
-        self.edited_doc().map(|d| d.to_string())
-    }
-
-    fn edited_doc(&self) -> Option<DocumentMut> {
-        let mut doc = self.doc.clone()?;
-        self.write_camera(&mut doc);
-        self.write_edits(&mut doc);
-        Some(doc)
+        let doc = self.doc.as_ref()?;
+        Some(doc.with_scene(&self.snapshot(), &self.framing(), &self.light_splits()))
     }
 
     /// The scene file's text with only the camera changed (to the view's).
     pub fn camera_toml(&self) -> Option<String> {
-        let mut doc = self.doc.clone()?;
-        self.write_camera(&mut doc);
-        Some(doc.to_string())
+        Some(self.doc.as_ref()?.with_camera(&self.framing()))
     }
 
-    fn write_camera(&self, doc: &mut DocumentMut) {
-        let cam = table_mut(doc.as_table_mut(), "camera");
-        set(cam, "position", toml_vec3(self.orbit.eye()));
-        set(cam, "look_at", toml_vec3(self.orbit.target));
-        set(cam, "up", toml_vec3(self.orbit.up));
-        if let Some((w, h)) = self.orthographic_halves() {
-            for (key, x) in [("half_width", w), ("half_height", h)] {
-                if x > 0.0 {
-                    set(cam, key, value(toml_number(x)));
-                } else {
-                    cam.remove(key);
-                }
-            }
-            cam.remove("vfov");
-        } else {
-            set(cam, "vfov", value(toml_number(self.orbit.vfov_deg)));
-        }
-        // `vfov` (or `half_height`) now says the extent: an axis would contradict it.
-        cam.remove("fov");
-        cam.remove("fov_axis");
-    }
-
-    fn write_edits(&self, doc: &mut DocumentMut) {
-        let root = doc.as_table_mut();
-        let s = &self.settings;
-        {
-            let render = table_mut(root, "render");
-            set(render, "spp", value(s.spp as i64));
-            if let Some(d) = s.max_depth {
-                set(render, "max_depth", value(d as i64));
-            }
-        }
-        set(table_mut(root, "photons"), "count", value(s.photons.count as i64));
-        if let Some(tables) = root.get_mut("lights").and_then(|l| l.as_array_of_tables_mut()) {
-            for ((t, light), edit) in tables.iter_mut().zip(&self.scene.lights).zip(&self.lights) {
-                t.remove("color");
-                set(t, "colour", toml_vec3(edit.colour));
-                set(t, "intensity", value(toml_number(edit.intensity)));
-                match light {
-                    Light::Point { .. } | Light::Spot(_) => set(t, "position", toml_vec3(edit.position)),
-                    Light::Area(_) => {
-                        set(t, "position", toml_vec3(edit.position));
-                        set(t, "samples", value(edit.samples.max(1) as i64));
-                    }
-                    Light::Environment { .. } | Light::Directional { .. } => {}
-                }
-            }
-        }
-        let materials = table_mut(root, "materials");
-        for m in &self.scene.materials {
-            write_material(table_mut(materials, &m.name), m);
+    /// The view's camera as the file frames it.
+    fn framing(&self) -> CameraFraming {
+        CameraFraming {
+            eye: self.orbit.eye(),
+            target: self.orbit.target,
+            up: self.orbit.up,
+            vfov_deg: self.orbit.vfov_deg,
+            orthographic: self.orthographic_halves(),
         }
     }
 
-    /// Writes the edited scene to `path` atomically; `caustic render path`
-    /// then renders what the viewer shows. A TOML file keeps its comments
-    /// and layout; a scene of another format is written whole as caustic
-    /// TOML (meshes it built as PLY files beside it), as `caustic convert`
-    /// writes it.
+    fn light_splits(&self) -> Vec<LightSplit> {
+        self.lights
+            .iter()
+            .map(|l| LightSplit {
+                colour: l.colour,
+                intensity: l.intensity,
+            })
+            .collect()
+    }
+
+    /// Writes the edited scene to `path` atomically, through the scene's
+    /// writer; `caustic render path` then renders what the viewer shows. A
+    /// TOML file keeps its comments and layout; a scene of another format is
+    /// written whole as caustic TOML (meshes it built as PLY files beside
+    /// it), as `caustic convert` writes it.
     pub fn save(&self, path: &Path) -> Result<(), SaveError> {
-        match self.edited_doc() {
-            Some(mut doc) => {
-                rebase_mesh_files(&mut doc, &self.path, path);
-                Ok(write_text(path, &doc.to_string())?)
-            }
+        match &self.doc {
+            Some(doc) => doc.save(&self.snapshot(), &self.framing(), &self.light_splits(), path)?,
             None => {
                 crate::scene::write::write_toml_scene(&self.snapshot(), path)?;
-                Ok(())
             }
         }
+        Ok(())
     }
 
     /// Writes the view's camera into the scene file's `[camera]` (nothing
     /// else of the file changes), atomically; only for a TOML file.
     pub fn save_camera(&self) -> Result<(), SaveError> {
-        let text = self
-            .camera_toml()
-            .ok_or_else(|| SaveError::NotToml(self.path.clone()))?;
-        Ok(write_text(&self.path, &text)?)
+        let doc = self.doc.as_ref().ok_or_else(|| SaveError::NotToml(self.path.clone()))?;
+        Ok(doc.save_camera(&self.framing())?)
     }
 }
 
@@ -421,72 +305,6 @@ fn light_power(light: &Light) -> Vec3A {
         Light::Directional { irradiance, .. } => *irradiance,
         Light::Area(a) => a.radiance,
         Light::Environment { radiance, .. } => *radiance,
-    }
-}
-
-/// Mesh files are relative to the scene file: a scene saved into another
-/// directory names them by absolute path (`asset:` names stay).
-fn rebase_mesh_files(doc: &mut DocumentMut, from: &Path, to: &Path) {
-    let dir = |p: &Path| {
-        let d = p
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        d.canonicalize().unwrap_or_else(|_| d.to_path_buf())
-    };
-    let (from_dir, to_dir) = (dir(from), dir(to));
-    if from_dir == to_dir {
-        return;
-    }
-    let Some(objects) = doc.get_mut("objects").and_then(|o| o.as_array_of_tables_mut()) else {
-        return;
-    };
-    for o in objects.iter_mut() {
-        let Some(file) = o.get("file").and_then(|f| f.as_str()) else {
-            continue;
-        };
-        if file.starts_with("asset:") || Path::new(file).is_absolute() {
-            continue;
-        }
-        let absolute = from_dir.join(file).display().to_string();
-        set(o, "file", value(absolute));
-    }
-}
-
-fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
-    write_atomically(path, |w| {
-        w.write_all(text.as_bytes()).map_err(|source| OutputError::Io {
-            path: path.to_path_buf(),
-            what: "write",
-            source,
-        })
-    })
-}
-
-fn write_material(t: &mut dyn TableLike, m: &Material) {
-    let model = match m.model {
-        ShadingModel::Phong => "phong",
-        ShadingModel::BlinnPhong => "blinn-phong",
-    };
-    set(t, "model", value(model));
-    set(t, "ambient", toml_vec3(m.ambient));
-    set(t, "diffuse", toml_vec3(m.diffuse));
-    set(t, "specular", toml_vec3(m.specular));
-    set(t, "shininess", value(toml_number(m.shininess)));
-    match m.mirror {
-        Some(mirror) => {
-            let mt = table_mut(t, "mirror");
-            set(mt, "reflectivity", value(toml_number(mirror.reflectivity)));
-            set(mt, "tint", toml_vec3(mirror.tint));
-        }
-        None => {
-            t.remove("mirror");
-        }
-    }
-    if let Some(d) = m.dielectric {
-        let dt = table_mut(t, "dielectric");
-        set(dt, "ior", value(toml_number(d.ior)));
-        set(dt, "tint", toml_vec3(d.tint));
     }
 }
 
@@ -508,13 +326,14 @@ pub fn same_photons(a: &LoadedScene, b: &LoadedScene) -> bool {
         && a.objects == b.objects
         && a.materials.len() == b.materials.len()
         && a.materials.iter().zip(&b.materials).all(|(ma, mb)| {
+            let (fa, fb) = (whitted_flags(ma), whitted_flags(mb));
             ma == mb
-                || (!ma.is_specular()
-                    && !mb.is_specular()
+                || (!fa.contains(LobeFlags::CASTS_CAUSTICS)
+                    && !fb.contains(LobeFlags::CASTS_CAUSTICS)
                     // The path integrator's photons reflect off clear
                     // coats with a probability that depends on the colour.
                     && (sa.integrator == IntegratorKind::Whitted || ma.coating.is_none())
-                    && ma.is_diffuse() == mb.is_diffuse()
+                    && fa.contains(LobeFlags::DIFFUSE) == fb.contains(LobeFlags::DIFFUSE)
                     && ma.coating == mb.coating
                     && ma.conductor == mb.conductor
                     && ma.dielectric == mb.dielectric)

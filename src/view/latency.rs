@@ -138,12 +138,10 @@ pub fn measure(path: &Path, size: (u32, u32), accel: AccelKind, repeats: usize) 
         }
     };
     let (mut cam_first, mut cam_full, mut mat_first, mut mat_full) = (vec![], vec![], vec![], vec![]);
-    let diffuse = core
-        .edit
-        .scene
-        .materials
-        .iter()
-        .position(|m| m.is_diffuse() && !m.is_specular());
+    let diffuse = core.edit.scene.materials.iter().position(|m| {
+        let f = crate::bsdf::whitted_flags(m);
+        f.contains(crate::bsdf::LobeFlags::DIFFUSE) && !f.contains(crate::bsdf::LobeFlags::CASTS_CAUSTICS)
+    });
     for i in 0..repeats {
         let (a, b) = run(
             &mut core,

@@ -66,7 +66,7 @@
 use super::map::Photon;
 use crate::accel::{Accel, Hit};
 use crate::bsdf::{reflect, DielectricInterface};
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::{Bsdf, LobeFlags, Transport, WhittedKind, WhittedSurface};
 use crate::integrator::fog;
 use crate::integrator::medium::{Flight, MediumTracker, WaterVolume};
 use crate::math::rng::{Domain, Rng};
@@ -85,10 +85,14 @@ pub struct Caster {
     pub radius: f32,
 }
 
-/// The bounding spheres of the objects whose material is specular (mirror
-/// or dielectric): exact for spheres, the box's circumscribed sphere else.
+/// The bounding spheres of the objects that cast caustics in Whitted's
+/// model (a mirror, glass, a smooth metal: `LobeFlags::CASTS_CAUSTICS`
+/// in `bsdf::whitted_flags`): exact for spheres, the box's circumscribed
+/// sphere else.
 pub fn specular_casters(scene: &Scene) -> Vec<Caster> {
-    casters_where(scene, |m| m.is_specular())
+    casters_where(scene, |m| {
+        crate::bsdf::whitted_flags(m).contains(LobeFlags::CASTS_CAUSTICS)
+    })
 }
 
 /// The bounding spheres of the objects whose material passes `keep`.
@@ -467,7 +471,8 @@ impl<'a> PhotonTracer<'a> {
         } else {
             Some(std::borrow::Cow::Borrowed(wrapper))
         };
-        let Some(m) = side.as_deref().filter(|m| !m.null) else {
+        let surface = side.as_deref().map(WhittedSurface::of);
+        let Some(surface) = surface.filter(|s| !matches!(s.kind, WhittedKind::PassThrough)) else {
             if path.bounces >= self.max_depth {
                 return Step::Done;
             }
@@ -475,74 +480,86 @@ impl<'a> PhotonTracer<'a> {
             path.ray = Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, ray.dir), ray.dir);
             return Step::Continue;
         };
-        let dir = if let Some(d) = m.dielectric {
-            if path.bounces >= self.max_depth {
-                return Step::Done;
-            }
-            let interface = DielectricInterface::of(ray.dir, &si, &d);
-            let DielectricInterface {
-                reflected, refracted, ..
-            } = interface;
-            match refracted {
-                None => reflected,
-                Some((t, cos_i, cos_t)) => {
-                    let model = d.fresnel.unwrap_or(FresnelModel::Schlick);
-                    if path.rng.f32() < interface.reflectance(model, cos_i, cos_t) {
-                        reflected
-                    } else {
-                        path.power *= d.tint;
-                        t
+        let dir = match surface.kind {
+            WhittedKind::Dielectric(d) => {
+                if path.bounces >= self.max_depth {
+                    return Step::Done;
+                }
+                let interface = DielectricInterface::of(ray.dir, &si, &d);
+                let DielectricInterface {
+                    reflected, refracted, ..
+                } = interface;
+                match refracted {
+                    None => reflected,
+                    Some((t, cos_i, cos_t)) => {
+                        let model = d.fresnel.unwrap_or(FresnelModel::Schlick);
+                        if path.rng.f32() < interface.reflectance(model, cos_i, cos_t) {
+                            reflected
+                        } else {
+                            path.power *= d.tint;
+                            t
+                        }
                     }
                 }
             }
-        } else if let Some(c) = m.conductor.filter(|c| c.roughness == 0.0) {
-            // A smooth metal reflects with its Fresnel colour.
-            if path.bounces >= self.max_depth {
-                return Step::Done;
-            }
-            let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
-                (-si.ng, -si.ns)
-            } else {
-                (si.ng, si.ns)
-            };
-            path.power *= crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k);
-            let mut dir = reflect(ray.dir, ns);
-            if dir.dot(ng) <= 0.0 {
-                dir = reflect(ray.dir, ng);
-            }
-            dir
-        } else {
-            let r = m.mirror.map_or(0.0, |mm| mm.reflectivity);
-            let reflects = r > 0.0 && (r >= 1.0 || path.rng.f32() < r);
-            if !reflects {
-                if path.bounces >= 1 && m.is_diffuse() {
-                    let incoming = -ray.dir;
-                    return Step::Stored(Photon {
-                        position: si.p,
-                        incoming,
-                        // The side the photon arrived on: where the
-                        // precomputed irradiance at this photon applies.
-                        normal: if si.ng.dot(incoming) >= 0.0 { si.ng } else { -si.ng },
-                        power: path.power / (1.0 - r),
-                    });
+            WhittedKind::Layered {
+                smooth_metal: Some(c), ..
+            } => {
+                // A smooth metal reflects with its Fresnel colour.
+                if path.bounces >= self.max_depth {
+                    return Step::Done;
                 }
-                return Step::Done;
+                let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
+                    (-si.ng, -si.ns)
+                } else {
+                    (si.ng, si.ns)
+                };
+                path.power *= crate::bsdf::fresnel::conductor(-ray.dir.dot(ns), c.eta, c.k);
+                let mut dir = reflect(ray.dir, ns);
+                if dir.dot(ng) <= 0.0 {
+                    dir = reflect(ray.dir, ng);
+                }
+                dir
             }
-            if path.bounces >= self.max_depth {
-                return Step::Done;
+            WhittedKind::Phong { .. } | WhittedKind::Layered { .. } | WhittedKind::PassThrough => {
+                // A mirror part reflects with probability `reflectivity`;
+                // otherwise the photon ends here, stored on a diffuse part
+                // after at least one bounce.
+                let mirror = match surface.kind {
+                    WhittedKind::Phong { mirror } => mirror.filter(|mm| mm.reflectivity > 0.0),
+                    _ => None,
+                };
+                let r = mirror.map_or(0.0, |mm| mm.reflectivity);
+                let reflects = r > 0.0 && (r >= 1.0 || path.rng.f32() < r);
+                let Some(mirror) = mirror.filter(|_| reflects) else {
+                    if path.bounces >= 1 && surface.flags.contains(LobeFlags::DIFFUSE) {
+                        let incoming = -ray.dir;
+                        return Step::Stored(Photon {
+                            position: si.p,
+                            incoming,
+                            // The side the photon arrived on: where the
+                            // precomputed irradiance at this photon applies.
+                            normal: if si.ng.dot(incoming) >= 0.0 { si.ng } else { -si.ng },
+                            power: path.power / (1.0 - r),
+                        });
+                    }
+                    return Step::Done;
+                };
+                if path.bounces >= self.max_depth {
+                    return Step::Done;
+                }
+                path.power *= mirror.tint;
+                let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
+                    (-si.ng, -si.ns)
+                } else {
+                    (si.ng, si.ns)
+                };
+                let mut dir = reflect(ray.dir, ns);
+                if dir.dot(ng) <= 0.0 {
+                    dir = reflect(ray.dir, ng);
+                }
+                dir
             }
-            let mirror = m.mirror.expect("reflects implies a mirror");
-            path.power *= mirror.tint;
-            let (ng, ns) = if si.ng.dot(ray.dir) > 0.0 {
-                (-si.ng, -si.ns)
-            } else {
-                (si.ng, si.ns)
-            };
-            let mut dir = reflect(ray.dir, ns);
-            if dir.dot(ng) <= 0.0 {
-                dir = reflect(ray.dir, ng);
-            }
-            dir
         };
         if !path.power.is_finite() || path.power.max_element() <= 0.0 {
             return Step::Done;

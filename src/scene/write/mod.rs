@@ -2,6 +2,10 @@
 //! (`caustic convert`): whatever front end read it, the file written loads
 //! back to the same scene.
 //!
+//! A scene read from a TOML file can instead be written back into that
+//! file's document, its comments and layout kept ([`TomlDocument`], the
+//! viewer's save).
+//!
 //! Each kind of thing has one function that writes it: `settings` the
 //! `[render]`, `[photons]` and `[camera]` tables, `materials` the materials
 //! and their textures, `lights` the lights, `objects` the objects and
@@ -17,11 +21,14 @@
 //! ([`super::compare::first_difference`]); when it is not, the meshes
 //! written are removed and the difference is the error.
 
+mod document;
 mod lights;
 mod materials;
 mod media;
 mod objects;
 mod settings;
+
+pub use document::{CameraFraming, LightKeys, LightSplit, TomlDocument};
 
 use super::LoadedScene;
 use crate::film::output::OutputError;
