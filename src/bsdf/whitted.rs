@@ -18,12 +18,10 @@
 use super::{flags_over_range, Bsdf, FresnelModel, LobeFlags, Transport};
 use crate::scene::{Conductor, Dielectric, Material, Mirror};
 
-/// How Whitted scatters at one (resolved, untextured) material.
-// Built on the stack for one shading point and matched at once, as a `Bsdf`
-// is: boxing the large variant would allocate at every shading point.
-#[allow(clippy::large_enum_variant)]
+/// How Whitted scatters at one (resolved, untextured) material. Small on
+/// purpose (no BSDF inside): the photon tracer builds one per hit.
 #[derive(Clone, Copy, Debug)]
-pub enum WhittedKind<'a> {
+pub enum WhittedKind {
     /// The report's Phong surface; a mirror part reflects `reflectivity` of
     /// the light.
     Phong {
@@ -32,10 +30,8 @@ pub enum WhittedKind<'a> {
     },
     /// A smooth dielectric interface.
     Dielectric(Dielectric),
-    /// A surface scattered by its BSDF (Fresnel exact, radiance transport).
+    /// A surface scattered by its BSDF ([`WhittedSurface::layered_bsdf`]).
     Layered {
-        /// The BSDF.
-        bsdf: Bsdf<'a>,
         /// A smooth metal: its photons reflect with the conductor's Fresnel
         /// colour.
         smooth_metal: Option<Conductor>,
@@ -46,18 +42,24 @@ pub enum WhittedKind<'a> {
 
 /// A material as Whitted scatters it, with the lobes it has in that model.
 #[derive(Clone, Copy, Debug)]
-pub struct WhittedSurface<'a> {
+pub struct WhittedSurface {
     /// What Whitted does at the surface.
-    pub kind: WhittedKind<'a>,
+    pub kind: WhittedKind,
     /// The lobes of [`Self::kind`]: a dielectric is specular and casts
     /// caustics; a layered surface has its BSDF's reflection lobes.
     pub flags: LobeFlags,
 }
 
-impl<'a> WhittedSurface<'a> {
+impl WhittedSurface {
+    /// The BSDF a layered surface is scattered by: Fresnel exact, radiance
+    /// transport.
+    pub fn layered_bsdf(m: &Material) -> Bsdf<'_> {
+        Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance)
+    }
+
     /// The Whitted model of `m`, a material resolved at a shading point
     /// (not a blend; its textures looked up).
-    pub fn of(m: &'a Material) -> Self {
+    pub fn of(m: &Material) -> Self {
         use LobeFlags as F;
         if m.null {
             return Self {
@@ -72,12 +74,11 @@ impl<'a> WhittedSurface<'a> {
             };
         }
         if m.conductor.is_some() || m.coating.is_some() || m.principled.is_some() {
-            let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
             // Whitted follows a layered surface's reflection only.
-            let flags = bsdf.flags().without(F::TRANSMISSION);
+            let flags = Self::layered_bsdf(m).flags().without(F::TRANSMISSION);
             let smooth_metal = m.conductor.filter(|_| flags.is_specular());
             return Self {
-                kind: WhittedKind::Layered { bsdf, smooth_metal },
+                kind: WhittedKind::Layered { smooth_metal },
                 flags,
             };
         }

@@ -278,7 +278,10 @@ impl<'a> Whitted<'a> {
         let surface = WhittedSurface::of(m);
         let mirror = match surface.kind {
             WhittedKind::Dielectric(d) => return self.dielectric(ray, &si, m, d, depth, ctx),
-            WhittedKind::Layered { bsdf, .. } => return self.layered(ray, &si, m, &bsdf, surface.flags, depth, ctx),
+            WhittedKind::Layered { .. } => {
+                let bsdf = WhittedSurface::layered_bsdf(m);
+                return self.layered(ray, &si, m, &bsdf, surface.flags, depth, ctx);
+            }
             WhittedKind::PassThrough => return self.trace_on(&si, ray.dir, depth, ctx),
             WhittedKind::Phong { mirror } => mirror,
         };
