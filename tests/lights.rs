@@ -393,3 +393,27 @@ fn a_panel_emitting_both_sides_lights_what_is_behind_it() {
     );
     assert!((down as f64 / n as f64 - 0.5).abs() < 0.01, "{down} of {n} downward");
 }
+
+/// An emitting shape keeps its BSDF: a lone sphere of albedo 0.5 emitting
+/// 2 in a uniform environment of radiance 1 shows `2 + 0.5 × 1` at every
+/// pixel (a convex Lambert surface under uniform light reflects its albedo
+/// times that radiance), and emission alone when its albedo is 0.
+#[test]
+fn an_emitting_shape_also_reflects_light() {
+    let sphere = |albedo: f32| {
+        let mut scene = load(&format!(
+            "[render]\nwidth = 16\nheight = 16\nspp = 64\nintegrator = \"path\"\nseed = 9\n\
+             [camera]\nposition = [0.0, 0.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 10\n\
+             [materials.lamp]\ndiffuse = {albedo}\nemission = 2.0\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"lamp\"\n"
+        ));
+        scene.scene.lights = vec![Light::Environment {
+            radiance: Vec3A::ONE,
+            map: None,
+        }];
+        mean(&film(&scene)).x
+    };
+    let (reflecting, black) = (sphere(0.5), sphere(0.0));
+    assert!((black - 2.0).abs() < 1e-3, "emission alone: {black}");
+    assert!((reflecting - 2.5).abs() < 0.02, "emission and reflection: {reflecting}");
+}
