@@ -4,23 +4,11 @@
 
 #![cfg(feature = "embree")]
 
-use caustic::accel::{self, AccelKind, AccelOptions};
-use caustic::film::Film;
-use caustic::integrator::{render, RenderPlan};
-use caustic::scene::load_scene;
-use caustic::scene::LoadedScene;
-use std::path::Path;
+mod common;
 
-fn render_with(scene: &LoadedScene, kind: AccelKind) -> Film {
-    let accel = accel::build(&scene.scene, kind, &AccelOptions::default()).unwrap();
-    render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film
-}
+use caustic::accel::AccelKind;
+use caustic::scene::load_scene;
+use std::path::Path;
 
 /// Bounds: mean |Δ| per channel below 1e-3 of the mean radiance, and at
 /// most 0.2% of pixels differing by more than 1% of the image's mean.
@@ -32,8 +20,8 @@ fn compare(name: &str) {
     scene.settings.spp = 2;
     scene.settings.photons.count = 20_000;
     let (a, b) = (
-        render_with(&scene, AccelKind::Embree),
-        render_with(&scene, AccelKind::KdTree),
+        common::render::film(&scene, AccelKind::Embree),
+        common::render::film(&scene, AccelKind::KdTree),
     );
     let mean = a.mean();
     let scale = (mean.x + mean.y + mean.z) / 3.0;

@@ -4,10 +4,11 @@
 //! included), emission against closed forms (by the emitter's own sampling
 //! and through the path integrator's MIS), and the TOML keys.
 
+mod common;
+
 use caustic::accel::brute::BruteForce;
 use caustic::accel::{self, Accel, AccelKind, AccelOptions, TriangleTest};
 use caustic::analysis::crosscheck::{crosscheck, CrosscheckOptions};
-use caustic::integrator::{render, RenderPlan};
 use caustic::math::offset_ray_origin;
 use caustic::math::rng::{Domain, Rng};
 use caustic::math::{Frame, Ray, Vec2, Vec3A};
@@ -416,14 +417,7 @@ fn floor_scene(light: &str) -> LoadedScene {
 }
 
 fn film_sum(scene: &LoadedScene) -> (Vec<f32>, f64) {
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film;
+    let film = common::render::film(scene, AccelKind::KdTree);
     let red: Vec<f32> = film.pixels.iter().map(|p| p[0]).collect();
     let sum = red.iter().map(|&x| f64::from(x)).sum();
     (red, sum)

@@ -2,9 +2,10 @@
 //! field), a near clipping plane and the orthographic projection, from the
 //! scene file to the image.
 
-use caustic::accel::{self, AccelKind, AccelOptions};
+mod common;
+
+use caustic::accel::AccelKind;
 use caustic::film::Film;
-use caustic::integrator::{render, RenderPlan};
 use caustic::scene::LoadedScene;
 use caustic::scene::{parse_scene, FovAxis, Projection, SceneError};
 use std::path::Path;
@@ -29,14 +30,7 @@ fn scene(camera: &str) -> String {
 
 fn image(text: &str) -> Film {
     let scene = load(text).unwrap();
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film
+    common::render::film(&scene, AccelKind::KdTree)
 }
 
 /// Mean absolute difference between horizontal neighbours: high for a sharp

@@ -2,8 +2,9 @@
 //! integrates to 1 and matches what is sampled), agreement with a constant
 //! environment, and their scene keys.
 
+mod common;
+
 use caustic::accel::{self, AccelKind, AccelOptions};
-use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Mat3A, Vec2, Vec3A};
 use caustic::scene::light::EnvironmentMap;
 use caustic::scene::{parse_scene, Light, LoadedScene};
@@ -115,14 +116,7 @@ fn furnace(environment: Light) -> f32 {
     )
     .unwrap();
     scene.scene.lights = vec![environment];
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film;
+    let film = common::render::film(&scene, AccelKind::KdTree);
     film.pixels.iter().map(|c| c.x).sum::<f32>() / film.pixels.len() as f32
 }
 

@@ -3,9 +3,10 @@
 //! textured) in the path and Whitted integrators, photons from every kind,
 //! and the scene keys.
 
+mod common;
+
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::photon::{Caster, PhotonTracer, TraceSettings};
-use caustic::integrator::{render, RenderPlan};
 use caustic::math::{Vec2, Vec3A};
 use caustic::scene::light::{Emitter, SpotFalloff};
 use caustic::scene::LoadedScene;
@@ -23,14 +24,7 @@ fn load_err(text: &str) -> String {
 
 /// The rendered film's pixels (x, y) → linear RGB.
 fn film(scene: &LoadedScene) -> caustic::film::Film {
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film
+    common::render::film(scene, AccelKind::KdTree)
 }
 
 fn mean(f: &caustic::film::Film) -> Vec3A {

@@ -4,9 +4,8 @@
 
 mod common;
 
-use caustic::accel::{self, AccelKind, AccelOptions};
+use caustic::accel::AccelKind;
 use caustic::analysis::converge::read_exr;
-use caustic::integrator::{render, RenderPlan};
 use caustic::io::serialized::write_serialized;
 use caustic::math::{Vec3, Vec3A};
 use caustic::scene::mitsuba::load_mitsuba_scene;
@@ -473,14 +472,7 @@ fn against_mitsuba(name: &str) -> (Vec3A, f32) {
     scene.settings.spp = 1024;
     scene.settings.seed = 3;
     let reference = read_exr(&dir.join(format!("{name}-mitsuba.exr")), Some((32, 32))).unwrap();
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film;
+    let film = common::render::film(&scene, AccelKind::KdTree);
     let (mut ours, mut theirs) = (Vec3A::ZERO, Vec3A::ZERO);
     let mut relmse = 0.0;
     for (a, b) in film.pixels.iter().zip(&reference.pixels) {
@@ -582,14 +574,7 @@ fn mean_of(body: &str, spp: u32) -> Vec3A {
     let dir = tempfile::tempdir().unwrap();
     let mut scene = load(dir.path(), body);
     scene.settings.spp = spp;
-    let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
-    let film = render(
-        &scene.scene,
-        accel.as_ref(),
-        &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
-    )
-    .film;
+    let film = common::render::film(&scene, AccelKind::KdTree);
     film.pixels.iter().map(|p| Vec3A::from(*p)).sum::<Vec3A>() / film.pixels.len() as f32
 }
 
