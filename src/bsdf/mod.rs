@@ -566,6 +566,33 @@ impl<'a> Bsdf<'a> {
         }
     }
 
+    /// The reflectance `kd` when this BSDF is a single Lambert lobe: its
+    /// value is then the constant `kd/π` wherever
+    /// [`lambert_reflects`](Self::lambert_reflects) holds and zero
+    /// elsewhere, so a sum over many directions (the photon gather's
+    /// `Σ f(ωo, ωp) Φp`) needs only that side test per direction, not an
+    /// evaluation of the lobes.
+    pub fn lambert(&self) -> Option<Vec3A> {
+        match self.lobes() {
+            [(Lobe::Lambert(l), _)] => Some(l.kd),
+            _ => None,
+        }
+    }
+
+    /// Whether [`eval`](Self::eval) of a single Lambert lobe is non-zero
+    /// for local directions whose `z` components are `wo_z` and `wi_z`
+    /// (both on the lobe's side, after turning a two-sided surface toward
+    /// `wo`): the same test, in the same arithmetic, as the lobe's.
+    #[inline]
+    pub fn lambert_reflects(&self, wo_z: f32, wi_z: f32) -> bool {
+        let (wo_z, wi_z) = if self.two_sided && wo_z < 0.0 {
+            (-wo_z, -wi_z)
+        } else {
+            (wo_z, wi_z)
+        };
+        wo_z > 0.0 && wi_z > 0.0
+    }
+
     /// The BSDF value of the non-delta lobes.
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         let (wo, wi) = self.oriented(wo, wi);

@@ -339,8 +339,27 @@ impl<'a> PathTracer<'a> {
                 // The caustic map's estimate, `Σ f(ωo, ωp) Φp / (π r²)`.
                 if let Some(c) = &self.caustics {
                     let g = &c.surface[usize::from(!delta_chain)];
-                    l += beta
-                        * c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
+                    let estimate = if let Some(kd) = bsdf.lambert() {
+                        // One Lambert lobe: `f` is `kd/π` wherever it is not
+                        // zero, so each photon needs only its side tests
+                        // (the lobe's and `consistent`'s, on the same
+                        // numbers), not a BSDF evaluation; the sum is the
+                        // same, term by term.
+                        let f = kd * (1.0 / std::f32::consts::PI);
+                        let geometric_wo = wo_world.dot(si.ng);
+                        c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
+                            let wi_world = r.incoming();
+                            let wi_z = wi_world.dot(frame.n);
+                            let geometric = wi_world.dot(si.ng) * geometric_wo > 0.0;
+                            let shading = wi_z * wo.z > 0.0;
+                            if geometric == shading && bsdf.lambert_reflects(wo.z, wi_z) {
+                                f * r.power()
+                            } else {
+                                Vec3A::ZERO
+                            }
+                        })
+                    } else {
+                        c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
                             let wi_world = r.incoming();
                             let wi = frame.to_local(wi_world);
                             if consistent(wi_world, wi) {
@@ -348,7 +367,9 @@ impl<'a> PathTracer<'a> {
                             } else {
                                 Vec3A::ZERO
                             }
-                        });
+                        })
+                    };
+                    l += beta * estimate;
                 }
 
                 // Next-event estimation.
