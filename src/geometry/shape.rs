@@ -150,16 +150,6 @@ impl Quad {
         }
     }
 
-    /// Local coordinates `(a, b)` of the projection of `p` onto the quad's
-    /// plane, clamped into `[0, 1]²` (for a point within rounding of the
-    /// quad that [`intersect`](Self::intersect) rejects).
-    pub fn clamped_coordinates(&self, p: Vec3A) -> (f32, f32) {
-        let rel = p - self.corner;
-        let a = self.w.dot(rel.cross(self.v));
-        let b = self.w.dot(self.u.cross(rel));
-        (a.clamp(0.0, 1.0), b.clamp(0.0, 1.0))
-    }
-
     /// Point at local coordinates `(a, b)` and its absolute error bound.
     pub fn surface(&self, a: f32, b: f32) -> (Vec3A, Vec3A) {
         let p = self.corner + self.u * a + self.v * b;

@@ -6,37 +6,24 @@
 //! space; a TLAS holding one instance geometry per object of such a mesh
 //! (its `to_world` transform), the triangles of each mesh that only one
 //! object uses (in world space: a ray traverses one BVH instead of two and
-//! is not transformed), one Embree quad per quad, and one user geometry
-//! per sphere, disk, cylinder or masked quad. TLAS geometry IDs equal object indices
+//! is not transformed), and one user geometry per analytic sphere, quad,
+//! disk or cylinder. TLAS geometry IDs equal object indices
 //! (`rtcAttachGeometryByID`), so a hit maps to `Hit::instance` without a
 //! table.
 //!
-//! Quads (unless their material has an alpha mask) are Embree's own quad
-//! primitive (`RTC_GEOMETRY_TYPE_QUAD`): traversal tests them without
-//! calling back into caustic, which the scenes' few large quads (floors,
-//! walls) paid on a large share of their rays. The closest hit on such a
-//! quad is then re-intersected with the scene's own
-//! [`Quad::intersect`](crate::scene::Quad::intersect), so the `(t, a, b)` the
-//! integrator shades from are those of the other backends, bit for bit; only
-//! which of two surfaces is nearest within rounding (a corner where two
-//! quads meet), a ray through a quad's edge, and an any-hit query ending
-//! within rounding of a quad can differ (the cross-check's ties). When the
-//! analytic test rejects Embree's hit (a ray within rounding of an edge), the
-//! hit keeps Embree's `t` with the coordinates of its point clamped into the
-//! quad.
-//!
-//! The other analytic shapes are user geometries whose callbacks call the
-//! scene's own [`Sphere::intersect`](crate::scene::Sphere::intersect),
-//! [`Quad::intersect`](crate::scene::Quad::intersect) (masked quads),
+//! Analytic shapes are user geometries whose callbacks call the scene's own
+//! [`Sphere::intersect`](crate::scene::Sphere::intersect),
+//! [`Quad::intersect`](crate::scene::Quad::intersect),
 //! [`Disk::intersect`](crate::scene::Disk::intersect) and
-//! [`Cylinder::intersect`](crate::scene::Cylinder::intersect): Embree then
-//! reports exactly the `(t, a, b)` of the other backends, bit for bit, and
-//! the robust-offset reasoning of the integrator (built around those
-//! functions' error bounds) holds unchanged. Embree's native spheres carry
-//! more rounding in their roots (`docs/benchmarks-history.md`), enough to
-//! report a ray leaving a sphere as hitting it again. An analytic shape
-//! whose material has an alpha mask gets the masked callbacks, which skip
-//! its holes through `scene::Cutouts`.
+//! [`Cylinder::intersect`](crate::scene::Cylinder::intersect): Embree then reports exactly
+//! the `(t, a, b)` of the other backends, bit for bit, so cross-checks need no
+//! tolerance for them and the robust-offset reasoning of the integrator (built
+//! around those functions' error bounds) holds unchanged. Embree's native
+//! spheres and quads were both slower here and less exact (their roots
+//! carry more rounding: the figures are in `docs/benchmarks-history.md`);
+//! scenes hold a handful of analytic shapes, so exactness wins and costs
+//! nothing. An analytic shape whose material has an alpha mask gets the
+//! masked callbacks, which skip its holes through `scene::Cutouts`.
 //!
 //! In robust mode (the default) Embree's `(u, v)` can be off the point at
 //! its own `t` on rays through a vertex or along a sliver's edge (rare: see
@@ -66,8 +53,8 @@ pub use scene::{CommittedScene, Geometry, Scene};
 
 use super::triangle::WatertightRay;
 use super::{Accel, AccelError, AccelOptions, AccelStats, Hit};
-use crate::math::{Ray, Transform, Vec3, Vec3A};
-use crate::scene::{Cutouts, Mesh, Quad, Scene as CausticScene, Shape};
+use crate::math::{Ray, Transform, Vec3A};
+use crate::scene::{Cutouts, Mesh, Scene as CausticScene, Shape};
 use analytic::{AnalyticGeometry, AnalyticShape};
 use device::version_string;
 use query::hit_record;
@@ -94,8 +81,9 @@ pub struct EmbreeAccel {
     blas: Vec<CommittedScene>,
     device: Device,
     stats: AccelStats,
-    /// Per object, how its hits are re-intersected (module docs).
-    refine: Vec<Refine>,
+    /// Per object, its mesh and transform when hits are re-intersected
+    /// (robust mode; module docs), else `None`.
+    refine: Vec<Option<(Arc<Mesh>, Transform)>>,
 }
 
 impl EmbreeAccel {
@@ -156,7 +144,6 @@ impl EmbreeAccel {
         }
         let mut top = Scene::new(&device, quality, options.embree_robust)?;
         let mut flattened = 0usize;
-        let masked_object = |id: usize| cutouts.as_ref().is_some_and(|c| c.has(id as u32));
         for (id, object) in scene.objects.iter().enumerate() {
             let analytic = |shape| {
                 let object = id as u32;
@@ -165,7 +152,6 @@ impl EmbreeAccel {
             };
             let geometry = match &object.shape {
                 Shape::Sphere(s) => analytic(AnalyticShape::Sphere(*s))?,
-                Shape::Quad(q) if !masked_object(id) => Geometry::quad(&device, quad_corners(q), quality)?,
                 Shape::Quad(q) => analytic(AnalyticShape::Quad(*q))?,
                 Shape::Disk(d) => analytic(AnalyticShape::Disk(*d))?,
                 Shape::Cylinder(c) => analytic(AnalyticShape::Cylinder(*c))?,
@@ -185,13 +171,11 @@ impl EmbreeAccel {
         let refine = scene
             .objects
             .iter()
-            .enumerate()
-            .map(|(id, object)| match &object.shape {
+            .map(|object| match &object.shape {
                 Shape::Mesh { mesh, transform, .. } if options.embree_robust => {
-                    Refine::Triangle(scene.meshes[*mesh as usize].clone(), *transform)
+                    Some((scene.meshes[*mesh as usize].clone(), *transform))
                 }
-                Shape::Quad(q) if !masked_object(id) => Refine::Quad(*q),
-                _ => Refine::None,
+                _ => None,
             })
             .collect();
         let (bytes, peak) = device.memory_bytes();
@@ -219,26 +203,13 @@ impl EmbreeAccel {
         })
     }
 
-    /// `hit` with `(t, u, v)` from caustic's own test on the primitive
-    /// Embree found: the watertight test on a mesh's triangle in robust
-    /// mode, [`Quad::intersect`](crate::scene::Quad::intersect) on a native
-    /// quad; or, when that test finds no hit in `(0, t_max)`, Embree's `t`
-    /// with the coordinates of its point, clamped into the primitive
-    /// (module docs).
+    /// `hit` with `(t, u, v)` from the watertight test on its triangle, in
+    /// robust mode, or with the barycentrics of its point when that test
+    /// finds no hit below `t_max` (module docs).
     #[inline]
     fn refined(&self, ray: &Ray, t_max: f32, hit: Hit) -> Hit {
-        let (mesh, transform) = match self.refine.get(hit.instance as usize) {
-            Some(Refine::Triangle(mesh, transform)) => (mesh, transform),
-            Some(Refine::Quad(q)) => {
-                return match q.intersect(ray, t_max) {
-                    Some((t, u, v)) => Hit { t, u, v, ..hit },
-                    None => {
-                        let (u, v) = q.clamped_coordinates(ray.at(hit.t));
-                        Hit { u, v, ..hit }
-                    }
-                };
-            }
-            _ => return hit,
+        let Some(Some((mesh, transform))) = self.refine.get(hit.instance as usize) else {
+            return hit;
         };
         let Some(&[a, b, c]) = mesh.triangles.get(hit.prim as usize) else {
             return hit;
@@ -308,23 +279,6 @@ impl Accel for EmbreeAccel {
     fn stats(&self) -> AccelStats {
         self.stats.clone()
     }
-}
-
-/// How an object's Embree hits are re-intersected by caustic's own code.
-enum Refine {
-    /// Reported as Embree found them (analytic user geometries, whose
-    /// callbacks are caustic's tests; meshes outside robust mode).
-    None,
-    /// A mesh's triangle, with the watertight test in object space.
-    Triangle(Arc<Mesh>, Transform),
-    /// A native Embree quad, with the analytic quad test.
-    Quad(Quad),
-}
-
-/// The corners of `q` in Embree's quad order (`v0 v1 v2 v3` around it):
-/// `corner`, `corner + u`, `corner + u + v`, `corner + v`.
-fn quad_corners(q: &Quad) -> [Vec3; 4] {
-    [q.corner, q.corner + q.u, q.corner + q.u + q.v, q.corner + q.v].map(Vec3::from)
 }
 
 /// Barycentric weights `(u, v)` of `p1`, `p2` for the projection of `q` onto

@@ -192,54 +192,6 @@ impl Geometry {
         Ok(geometry)
     }
 
-    /// Embree's own quad primitive (`RTC_GEOMETRY_TYPE_QUAD`, one quad with
-    /// the corners `c`, `c + u`, `c + u + v`, `c + v`): traversal tests it
-    /// without calling back into caustic. Embree's `t` and `(u, v)` carry
-    /// its own rounding; closest hits are re-intersected with
-    /// [`Quad::intersect`](crate::scene::Quad::intersect) (`EmbreeAccel`).
-    pub fn quad(device: &Device, corners: [Vec3; 4], quality: sys::RTCBuildQuality) -> Result<Self, AccelError> {
-        let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_QUAD)?;
-        // SAFETY: live geometry; Embree allocates 4 items of 12 bytes (plus
-        // its padding for 16-byte loads) and returns a pointer valid until release.
-        let vertices = unsafe {
-            sys::rtcSetNewGeometryBuffer(
-                geometry.raw,
-                sys::RTC_BUFFER_TYPE_VERTEX,
-                0,
-                sys::RTC_FORMAT_FLOAT3,
-                12,
-                4,
-            )
-        } as *mut [f32; 3];
-        device.check("vertex buffer of a quad")?;
-        // SAFETY: live geometry; one item of 16 bytes, valid until release.
-        let indices = unsafe {
-            sys::rtcSetNewGeometryBuffer(
-                geometry.raw,
-                sys::RTC_BUFFER_TYPE_INDEX,
-                0,
-                sys::RTC_FORMAT_UINT4,
-                16,
-                1,
-            )
-        } as *mut [u32; 4];
-        device.check("index buffer of a quad")?;
-        if vertices.is_null() || indices.is_null() {
-            return Err(AccelError::Embree("no buffer for a quad".into()));
-        }
-        // SAFETY: `vertices` holds 4 items of `[f32; 3]` and `indices` one
-        // `[u32; 4]` (both checked non-null).
-        unsafe {
-            for (i, c) in corners.iter().enumerate() {
-                *vertices.add(i) = c.to_array();
-            }
-            *indices = [0, 1, 2, 3];
-            sys::rtcSetGeometryBuildQuality(geometry.raw, quality);
-        }
-        geometry.commit("quad geometry")?;
-        Ok(geometry)
-    }
-
     /// An instance of the committed `blas` placed by `to_world`.
     pub fn instance(device: &Device, blas: &CommittedScene, to_world: &Affine3A) -> Result<Self, AccelError> {
         let mut geometry = Self::new(device, sys::RTC_GEOMETRY_TYPE_INSTANCE)?;

@@ -39,7 +39,6 @@ pub const RTC_DEVICE_PROPERTY_VERSION: RTCDeviceProperty = 0;
 /// `enum RTCFormat` (the few used).
 pub type RTCFormat = u32;
 pub const RTC_FORMAT_UINT3: RTCFormat = 0x5003;
-pub const RTC_FORMAT_UINT4: RTCFormat = 0x5004;
 pub const RTC_FORMAT_FLOAT3: RTCFormat = 0x9003;
 pub const RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR: RTCFormat = 0x9234;
 
@@ -62,7 +61,6 @@ pub const RTC_BUFFER_TYPE_VERTEX: RTCBufferType = 1;
 /// `enum RTCGeometryType` (the few used).
 pub type RTCGeometryType = u32;
 pub const RTC_GEOMETRY_TYPE_TRIANGLE: RTCGeometryType = 0;
-pub const RTC_GEOMETRY_TYPE_QUAD: RTCGeometryType = 1;
 pub const RTC_GEOMETRY_TYPE_USER: RTCGeometryType = 120;
 pub const RTC_GEOMETRY_TYPE_INSTANCE: RTCGeometryType = 121;
 
