@@ -110,6 +110,10 @@ unsafe fn read_ray_n(base: *const f32, n: usize, i: usize) -> (Ray, f32, f32) {
 }
 
 /// `RTCIntersectFunctionN` of the analytic shapes.
+///
+/// `rtcIntersect1` and `rtcOccluded1` call with one lane (`N = 1`): that
+/// case is its own copy of the lane's code, with the structure-of-arrays
+/// index arithmetic folded away.
 pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
     args: *const sys::RTCIntersectFunctionNArguments,
 ) {
@@ -118,54 +122,87 @@ pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
     // from float 12N), and `geometryUserPtr` is our live `AnalyticGeometry`.
     unsafe {
         let args = &*args;
-        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let n = args.N as usize;
-        let base = args.rayhit as *mut f32;
-        for i in 0..n {
-            if *args.valid.add(i) == 0 {
-                continue;
+        if n == 1 {
+            intersect_lane::<MASKED>(args, 1, 0);
+        } else {
+            for i in 0..n {
+                intersect_lane::<MASKED>(args, n, i);
             }
-            let (ray, tnear, tfar) = read_ray_n(base, n, i);
-            let Some((t, u, v)) = shape.intersect::<MASKED>(&ray, tfar) else {
-                continue;
-            };
-            if t < tnear {
-                continue;
-            }
-            *base.add(8 * n + i) = t;
-            let hit = base.add(12 * n);
-            // Geometric normal is not used by caustic (the scene recomputes it).
-            *hit.add(i) = 0.0;
-            *hit.add(n + i) = 0.0;
-            *hit.add(2 * n + i) = 0.0;
-            *hit.add(3 * n + i) = u;
-            *hit.add(4 * n + i) = v;
-            let ids = hit as *mut u32;
-            *ids.add(5 * n + i) = args.primID;
-            *ids.add(6 * n + i) = args.geomID;
-            // Analytic shapes live only in the TLAS: no enclosing instance.
-            *ids.add(7 * n + i) = sys::RTC_INVALID_GEOMETRY_ID;
         }
     }
 }
 
-/// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit.
+/// Lane `i` of [`analytic_intersect`]'s `n` lanes.
+///
+/// # Safety
+/// `args` as Embree passes them to an intersect function of `n` lanes, `i < n`.
+#[inline(always)]
+unsafe fn intersect_lane<const MASKED: bool>(args: &sys::RTCIntersectFunctionNArguments, n: usize, i: usize) {
+    // SAFETY: per the function contract (see `analytic_intersect`).
+    unsafe {
+        if *args.valid.add(i) == 0 {
+            return;
+        }
+        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
+        let base = args.rayhit as *mut f32;
+        let (ray, tnear, tfar) = read_ray_n(base, n, i);
+        let Some((t, u, v)) = shape.intersect::<MASKED>(&ray, tfar) else {
+            return;
+        };
+        if t < tnear {
+            return;
+        }
+        *base.add(8 * n + i) = t;
+        let hit = base.add(12 * n);
+        // Geometric normal is not used by caustic (the scene recomputes it).
+        *hit.add(i) = 0.0;
+        *hit.add(n + i) = 0.0;
+        *hit.add(2 * n + i) = 0.0;
+        *hit.add(3 * n + i) = u;
+        *hit.add(4 * n + i) = v;
+        let ids = hit as *mut u32;
+        *ids.add(5 * n + i) = args.primID;
+        *ids.add(6 * n + i) = args.geomID;
+        // Analytic shapes live only in the TLAS: no enclosing instance.
+        *ids.add(7 * n + i) = sys::RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
+/// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit
+/// (one lane, `N = 1`, on its own path as in [`analytic_intersect`]).
 pub(super) unsafe extern "C" fn analytic_occluded<const MASKED: bool>(args: *const sys::RTCOccludedFunctionNArguments) {
     // SAFETY: as in `analytic_intersect`, with `ray` an RTCRayN of `N` lanes.
     unsafe {
         let args = &*args;
-        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let n = args.N as usize;
-        let base = args.ray as *mut f32;
-        for i in 0..n {
-            if *args.valid.add(i) == 0 {
-                continue;
+        if n == 1 {
+            occluded_lane::<MASKED>(args, 1, 0);
+        } else {
+            for i in 0..n {
+                occluded_lane::<MASKED>(args, n, i);
             }
-            let (ray, tnear, tfar) = read_ray_n(base, n, i);
-            if let Some((t, _, _)) = shape.intersect::<MASKED>(&ray, tfar) {
-                if t >= tnear {
-                    *base.add(8 * n + i) = f32::NEG_INFINITY;
-                }
+        }
+    }
+}
+
+/// Lane `i` of [`analytic_occluded`]'s `n` lanes.
+///
+/// # Safety
+/// `args` as Embree passes them to an occluded function of `n` lanes, `i < n`.
+#[inline(always)]
+unsafe fn occluded_lane<const MASKED: bool>(args: &sys::RTCOccludedFunctionNArguments, n: usize, i: usize) {
+    // SAFETY: per the function contract (see `analytic_occluded`).
+    unsafe {
+        if *args.valid.add(i) == 0 {
+            return;
+        }
+        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
+        let base = args.ray as *mut f32;
+        let (ray, tnear, tfar) = read_ray_n(base, n, i);
+        if let Some((t, _, _)) = shape.intersect::<MASKED>(&ray, tfar) {
+            if t >= tnear {
+                *base.add(8 * n + i) = f32::NEG_INFINITY;
             }
         }
     }
