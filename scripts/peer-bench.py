@@ -273,6 +273,23 @@ def mean_ratio(x, ref):
     return float(x.mean() / ref.mean())
 
 
+def cpu_description():
+    """The processor's model and its widest vectors: Mitsuba's LLVM backend
+    compiles its kernels for the host's, so the ratio depends on them."""
+    model, flags = "unknown", set()
+    try:
+        for line in open("/proc/cpuinfo"):
+            key, _, value = line.partition(":")
+            if key.strip() == "model name":
+                model = value.strip()
+            elif key.strip() == "flags":
+                flags = set(value.split())
+    except OSError:
+        pass
+    width = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "SSE"
+    return f"{model}, {width}"
+
+
 def load_uptime():
     with open("/proc/loadavg") as f:
         return f.read().split()[0]
@@ -318,7 +335,7 @@ def main():
             sys.exit(f"unknown scene {name}")
 
     print(f"caustic {', '.join(binaries)}; mitsuba {mi.__version__} llvm_ad_rgb; threads {args.threads}; "
-          f"load {load_uptime()} at start")
+          f"load {load_uptime()} at start; cpu {cpu_description()}")
     rows = []
     for name, (toml, make) in scenes.items():
         toml_path = os.path.join(work, f"{name}.toml")
