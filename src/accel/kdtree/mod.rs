@@ -198,14 +198,32 @@ impl KdTreeAccel {
         out
     }
 
+    /// The alpha masks when the query is `MASKED` (the scene has some):
+    /// queries of a scene without masks are compiled without the tests.
+    #[inline(always)]
+    fn masks<const MASKED: bool>(&self) -> Option<&Arc<Cutouts>> {
+        if MASKED {
+            self.cutouts.as_ref()
+        } else {
+            None
+        }
+    }
+
     /// Tests one object (all its triangles for a mesh, through its tree)
     /// against `ray` below `limit`, reporting every hit to `found` (which may
     /// lower `limit`). With `any`, a mesh stops at its first hit.
     #[inline]
-    fn test_object(&self, ray: &Ray, instance: u32, limit: &mut f32, any: bool, found: &mut impl FnMut(Hit, &mut f32)) {
+    fn test_object<const MASKED: bool>(
+        &self,
+        ray: &Ray,
+        instance: u32,
+        limit: &mut f32,
+        any: bool,
+        found: &mut impl FnMut(Hit, &mut f32),
+    ) {
         match &self.objects[instance as usize] {
             TopObject::Sphere(s) => {
-                let t = match &self.cutouts {
+                let t = match self.masks::<MASKED>() {
                     Some(c) => c.sphere(instance, s, ray, *limit),
                     None => s.intersect(ray, *limit),
                 };
@@ -221,7 +239,7 @@ impl KdTreeAccel {
                 }
             }
             TopObject::Quad(q) => {
-                let h = match &self.cutouts {
+                let h = match self.masks::<MASKED>() {
                     Some(c) => c.quad(instance, q, ray, *limit),
                     None => q.intersect(ray, *limit),
                 };
@@ -239,7 +257,7 @@ impl KdTreeAccel {
                 }
             }
             TopObject::Disk(d) => {
-                let h = match &self.cutouts {
+                let h = match self.masks::<MASKED>() {
                     Some(c) => c.disk(instance, d, ray, *limit),
                     None => d.intersect(ray, *limit),
                 };
@@ -257,7 +275,7 @@ impl KdTreeAccel {
                 }
             }
             TopObject::Cylinder(cyl) => {
-                let t = match &self.cutouts {
+                let t = match self.masks::<MASKED>() {
                     Some(c) => c.cylinder(instance, cyl, ray, *limit),
                     None => cyl.intersect(ray, *limit),
                 };
@@ -278,7 +296,7 @@ impl KdTreeAccel {
                 let watertight = WatertightRay::new(&local);
                 let test = self.test;
                 let start_limit = *limit;
-                let cutouts = self.cutouts.as_ref().filter(|c| c.has(instance));
+                let cutouts = self.masks::<MASKED>().filter(|c| c.has(instance));
                 let leaf = |range: Range<usize>| {
                     for tri in &blas.tris[range] {
                         let prim = tri.prim;
@@ -356,7 +374,7 @@ impl KdTreeAccel {
     }
 
     /// Any hit with `0 < t < t_max`.
-    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+    fn any_hit<const MASKED: bool>(&self, ray: &Ray, t_max: f32) -> bool {
         if !Self::is_queryable(ray, t_max) {
             return false;
         }
@@ -368,7 +386,7 @@ impl KdTreeAccel {
                     continue;
                 }
                 let mut limit = t_max;
-                self.test_object(ray, instance, &mut limit, true, &mut |_, _| hit = true);
+                self.test_object::<MASKED>(ray, instance, &mut limit, true, &mut |_, _| hit = true);
                 if hit {
                     return LeafResult::Stop;
                 }
@@ -396,7 +414,7 @@ impl KdTreeAccel {
     /// best and, when there are several, replays the oracle's ordered loop on
     /// them alone. (Hits further away cannot change that loop's outcome: any
     /// limit more than 8 ulps above a hit's `t` accepts it.)
-    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    fn closest_hit<const MASKED: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if !Self::is_queryable(ray, t_max) {
             return None;
         }
@@ -410,7 +428,7 @@ impl KdTreeAccel {
                     continue;
                 }
                 let mut limit = if best_t.is_finite() { window(best_t) } else { t_max };
-                self.test_object(ray, instance, &mut limit, false, &mut |hit, limit| {
+                self.test_object::<MASKED>(ray, instance, &mut limit, false, &mut |hit, limit| {
                     if hit.t < best_t {
                         best_t = hit.t;
                         *limit = window(best_t);
@@ -533,11 +551,17 @@ impl NearHits {
 
 impl Accel for KdTreeAccel {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.closest_hit(ray, t_max)
+        match self.cutouts {
+            Some(_) => self.closest_hit::<true>(ray, t_max),
+            None => self.closest_hit::<false>(ray, t_max),
+        }
     }
 
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.any_hit(ray, t_max)
+        match self.cutouts {
+            Some(_) => self.any_hit::<true>(ray, t_max),
+            None => self.any_hit::<false>(ray, t_max),
+        }
     }
 
     fn stats(&self) -> AccelStats {
