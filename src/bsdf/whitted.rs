@@ -30,7 +30,8 @@ pub enum WhittedKind {
     },
     /// A smooth dielectric interface.
     Dielectric(Dielectric),
-    /// A surface scattered by its BSDF ([`WhittedSurface::layered_bsdf`]).
+    /// A surface scattered by its BSDF (Fresnel exact, radiance transport;
+    /// [`WhittedSurface::with_bsdf`] returns it).
     Layered {
         /// A smooth metal: its photons reflect with the conductor's Fresnel
         /// colour.
@@ -51,36 +52,41 @@ pub struct WhittedSurface {
 }
 
 impl WhittedSurface {
-    /// The BSDF a layered surface is scattered by: Fresnel exact, radiance
-    /// transport.
-    pub fn layered_bsdf(m: &Material) -> Bsdf<'_> {
-        Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance)
-    }
-
     /// The Whitted model of `m`, a material resolved at a shading point
     /// (not a blend; its textures looked up).
     pub fn of(m: &Material) -> Self {
+        Self::with_bsdf(m).0
+    }
+
+    /// [`of`](Self::of), and for a [`WhittedKind::Layered`] surface the
+    /// BSDF its flags were read from, which the integrator then scatters
+    /// by (built once per shading point).
+    pub fn with_bsdf(m: &Material) -> (Self, Option<Bsdf<'_>>) {
         use LobeFlags as F;
         if m.null {
-            return Self {
+            let surface = Self {
                 kind: WhittedKind::PassThrough,
                 flags: F::PASS_THROUGH,
             };
+            return (surface, None);
         }
         if let Some(d) = m.dielectric {
-            return Self {
+            let surface = Self {
                 kind: WhittedKind::Dielectric(d),
                 flags: F::SPECULAR | F::CASTS_CAUSTICS | F::REFLECTION | F::TRANSMISSION,
             };
+            return (surface, None);
         }
         if m.conductor.is_some() || m.coating.is_some() || m.principled.is_some() {
+            let bsdf = Bsdf::for_material(m, FresnelModel::Exact, Transport::Radiance);
             // Whitted follows a layered surface's reflection only.
-            let flags = Self::layered_bsdf(m).flags().without(F::TRANSMISSION);
+            let flags = bsdf.flags().without(F::TRANSMISSION);
             let smooth_metal = m.conductor.filter(|_| flags.is_specular());
-            return Self {
+            let surface = Self {
                 kind: WhittedKind::Layered { smooth_metal },
                 flags,
             };
+            return (surface, Some(bsdf));
         }
         let r = m.mirror.map_or(0.0, |mi| mi.reflectivity);
         let mut flags = F::NONE;
@@ -93,10 +99,11 @@ impl WhittedSurface {
         if r > 0.0 {
             flags |= F::SPECULAR | F::CASTS_CAUSTICS | F::REFLECTION;
         }
-        Self {
+        let surface = Self {
             kind: WhittedKind::Phong { mirror: m.mirror },
             flags,
-        }
+        };
+        (surface, None)
     }
 }
 

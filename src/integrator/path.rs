@@ -329,9 +329,10 @@ impl<'a> PathTracer<'a> {
             // Which side of the geometric surface a direction leaves on,
             // against which side the shading frame says: they must agree,
             // or light would leak through the surface.
-            let consistent = |wi_world: Vec3A, wi: Vec3A| {
-                let geometric = wi_world.dot(si.ng) * wo_world.dot(si.ng) > 0.0;
-                let shading = wi.z * wo.z > 0.0;
+            let wo_geometric = wo_world.dot(si.ng);
+            let consistent = |wi_world: Vec3A, wi_z: f32| {
+                let geometric = wi_world.dot(si.ng) * wo_geometric > 0.0;
+                let shading = wi_z * wo.z > 0.0;
                 geometric == shading
             };
 
@@ -346,13 +347,10 @@ impl<'a> PathTracer<'a> {
                         // numbers), not a BSDF evaluation; the sum is the
                         // same, term by term.
                         let f = kd * (1.0 / std::f32::consts::PI);
-                        let geometric_wo = wo_world.dot(si.ng);
                         c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
                             let wi_world = r.incoming();
                             let wi_z = wi_world.dot(frame.n);
-                            let geometric = wi_world.dot(si.ng) * geometric_wo > 0.0;
-                            let shading = wi_z * wo.z > 0.0;
-                            if geometric == shading && bsdf.lambert_reflects(wo.z, wi_z) {
+                            if consistent(wi_world, wi_z) && bsdf.lambert_reflects(wo.z, wi_z) {
                                 f * r.power()
                             } else {
                                 Vec3A::ZERO
@@ -362,7 +360,7 @@ impl<'a> PathTracer<'a> {
                         c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
                             let wi_world = r.incoming();
                             let wi = frame.to_local(wi_world);
-                            if consistent(wi_world, wi) {
+                            if consistent(wi_world, wi.z) {
                                 bsdf.eval(wo, wi) * r.power()
                             } else {
                                 Vec3A::ZERO
@@ -376,7 +374,7 @@ impl<'a> PathTracer<'a> {
                 if let Some(ls) = self.lights.sample(si.p, rng.f32(), rng.vec2()) {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi) * wi.z.abs();
-                    if f.max_element() > 0.0 && consistent(ls.wi, wi) {
+                    if f.max_element() > 0.0 && consistent(ls.wi, wi.z) {
                         let origin = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
                         let (shadow, t_max, length) = match ls.target {
                             Some(q) => (
@@ -406,7 +404,7 @@ impl<'a> PathTracer<'a> {
                 break;
             };
             let wi_world = frame.to_world(s.wi).normalize();
-            if !consistent(wi_world, s.wi) {
+            if !consistent(wi_world, s.wi.z) {
                 break;
             }
             beta *= s.weight();

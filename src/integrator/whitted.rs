@@ -275,15 +275,15 @@ impl<'a> Whitted<'a> {
     /// Radiance the surface at `si` reflects or transmits toward the ray's origin.
     fn scatter(&self, ray: &Ray, si: &SurfaceInteraction, m: &Material, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = *si;
-        let surface = WhittedSurface::of(m);
-        let mirror = match surface.kind {
-            WhittedKind::Dielectric(d) => return self.dielectric(ray, &si, m, d, depth, ctx),
-            WhittedKind::Layered { .. } => {
-                let bsdf = WhittedSurface::layered_bsdf(m);
-                return self.layered(ray, &si, m, &bsdf, surface.flags, depth, ctx);
+        let (surface, bsdf) = WhittedSurface::with_bsdf(m);
+        let mirror = match (surface.kind, bsdf) {
+            (WhittedKind::Dielectric(d), _) => return self.dielectric(ray, &si, m, d, depth, ctx),
+            (WhittedKind::Layered { .. }, Some(bsdf)) => {
+                return self.layered(ray, &si, m, &bsdf, surface.flags, depth, ctx)
             }
-            WhittedKind::PassThrough => return self.trace_on(&si, ray.dir, depth, ctx),
-            WhittedKind::Phong { mirror } => mirror,
+            (WhittedKind::PassThrough, _) => return self.trace_on(&si, ray.dir, depth, ctx),
+            (WhittedKind::Phong { mirror }, _) => mirror,
+            (WhittedKind::Layered { .. }, None) => unreachable!("a layered surface comes with its BSDF"),
         };
         let local = self.direct(ray, &si, m, Local::Surface, surface.flags, ctx);
         match mirror {

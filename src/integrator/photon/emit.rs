@@ -521,11 +521,12 @@ impl<'a> PhotonTracer<'a> {
                 }
                 dir
             }
-            WhittedKind::Phong { .. } | WhittedKind::Layered { .. } | WhittedKind::PassThrough => {
+            // (Pass-through surfaces were let through above.)
+            kind => {
                 // A mirror part reflects with probability `reflectivity`;
                 // otherwise the photon ends here, stored on a diffuse part
                 // after at least one bounce.
-                let mirror = match surface.kind {
+                let mirror = match kind {
                     WhittedKind::Phong { mirror } => mirror.filter(|mm| mm.reflectivity > 0.0),
                     _ => None,
                 };

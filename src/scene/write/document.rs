@@ -11,10 +11,8 @@
 //! given), or nothing is written.
 
 use super::WriteError;
-use crate::film::output::{write_atomically, OutputError};
 use crate::math::Vec3A;
 use crate::scene::{Light, LoadedScene, Material, SceneError, ShadingModel};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use toml_edit::{value, Array, DocumentMut, Item, Table, TableLike, Value};
 
@@ -112,10 +110,14 @@ impl TomlDocument {
     /// The document with `loaded`'s editable values written in: the
     /// camera as `framing`, lights split as `lights` (one per scene light).
     pub fn with_scene(&self, loaded: &LoadedScene, framing: &CameraFraming, lights: &[LightSplit]) -> String {
+        self.edited(loaded, framing, lights).to_string()
+    }
+
+    fn edited(&self, loaded: &LoadedScene, framing: &CameraFraming, lights: &[LightSplit]) -> DocumentMut {
         let mut doc = self.doc.clone();
         write_camera(&mut doc, framing);
         write_values(&mut doc, loaded, lights);
-        doc.to_string()
+        doc
     }
 
     /// Writes the document with `loaded`'s values to `out` atomically (see
@@ -130,9 +132,7 @@ impl TomlDocument {
         lights: &[LightSplit],
         out: &Path,
     ) -> Result<(), WriteError> {
-        let mut doc = self.doc.clone();
-        write_camera(&mut doc, framing);
-        write_values(&mut doc, loaded, lights);
+        let mut doc = self.edited(loaded, framing, lights);
         rebase_mesh_files(&mut doc, &self.path, out);
         let text = doc.to_string();
         let mut again = crate::scene::parse_scene(&text, out).map_err(|e| WriteError::Reload(Box::new(e)))?;
@@ -142,13 +142,13 @@ impl TomlDocument {
         if let Some(d) = crate::scene::compare::first_difference(loaded, &again) {
             return Err(WriteError::Differs(d));
         }
-        Ok(write_text(out, &text)?)
+        Ok(super::write_text(out, &text)?)
     }
 
     /// Writes `framing` into the file's `[camera]`, nothing else changed,
     /// atomically.
     pub fn save_camera(&self, framing: &CameraFraming) -> Result<(), WriteError> {
-        Ok(write_text(&self.path, &self.with_camera(framing))?)
+        Ok(super::write_text(&self.path, &self.with_camera(framing))?)
     }
 }
 
@@ -321,16 +321,6 @@ fn rebase_mesh_files(doc: &mut DocumentMut, from: &Path, to: &Path) {
         let absolute = from_dir.join(file).display().to_string();
         set(o, "file", value(absolute));
     }
-}
-
-fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
-    write_atomically(path, |w| {
-        w.write_all(text.as_bytes()).map_err(|source| OutputError::Io {
-            path: path.to_path_buf(),
-            what: "write",
-            source,
-        })
-    })
 }
 
 #[cfg(test)]

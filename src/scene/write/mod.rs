@@ -137,14 +137,7 @@ pub fn write_toml_scene(loaded: &LoadedScene, out: &Path) -> Result<Written, Wri
         }
         return Err(e);
     }
-    crate::film::output::write_atomically(out, |w| {
-        use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(|source| OutputError::Io {
-            path: out.to_path_buf(),
-            what: "writing",
-            source,
-        })
-    })?;
+    write_text(out, &text)?;
     Ok(Written {
         scene: out.to_path_buf(),
         meshes: written,
@@ -153,6 +146,18 @@ pub fn write_toml_scene(loaded: &LoadedScene, out: &Path) -> Result<Written, Wri
 }
 
 /// The directory `out` is written in (`.` for a bare file name).
+/// Writes `text` to `path` atomically (complete or not at all).
+fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
+    crate::film::output::write_atomically(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(|source| OutputError::Io {
+            path: path.to_path_buf(),
+            what: "writing",
+            source,
+        })
+    })
+}
+
 fn output_dir(out: &Path) -> PathBuf {
     match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
