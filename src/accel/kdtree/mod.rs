@@ -28,6 +28,7 @@ use super::triangle::{moller_trumbore, WatertightRay};
 use super::{Accel, AccelOptions, AccelStats, Hit, TriangleTest};
 use crate::math::{Aabb, Ray, Transform, Vec3, Vec3A};
 use crate::scene::{Cutouts, Cylinder, Disk, Mesh, Quad, Scene, Shape, Sphere};
+use arrayvec::ArrayVec;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -461,44 +462,53 @@ fn ulps_above(t: f32, n: u32) -> f32 {
 }
 
 /// Recently tested objects (mailboxing, Amanatides & Woo 1987): an object
-/// several top-level leaves reference is tested once per query.
-#[derive(Default)]
+/// several top-level leaves reference is tested once per query. Empty slots
+/// hold [`Mailbox::EMPTY`], which no object index reaches (a scene holds far
+/// fewer objects), so a lookup compares the whole fixed-size array.
 struct Mailbox {
     ids: [u32; MAILBOX_SIZE],
-    used: usize,
+    next: usize,
+}
+
+impl Default for Mailbox {
+    fn default() -> Self {
+        Self {
+            ids: [Self::EMPTY; MAILBOX_SIZE],
+            next: 0,
+        }
+    }
 }
 
 impl Mailbox {
+    /// The id of an empty slot.
+    const EMPTY: u32 = u32::MAX;
+
     /// True when `id` was tested already; else remembers it.
     #[inline]
     fn seen(&mut self, id: u32) -> bool {
-        let n = self.used.min(MAILBOX_SIZE);
-        if self.ids[..n].contains(&id) {
+        if self.ids.contains(&id) {
             return true;
         }
-        self.ids[self.used % MAILBOX_SIZE] = id;
-        self.used += 1;
+        self.ids[self.next % MAILBOX_SIZE] = id;
+        self.next += 1;
         false
     }
 }
 
-/// Hits collected by a closest-hit query: a fixed buffer, spilling to the
-/// heap only when a ray meets many surfaces at almost the same `t`.
+/// Hits collected by a closest-hit query: a fixed buffer (not initialised
+/// up front), spilling to the heap only when a ray meets many surfaces at
+/// almost the same `t`.
 #[derive(Default)]
 struct NearHits {
-    fixed: [Option<Hit>; 8],
-    len: usize,
+    fixed: ArrayVec<Hit, 8>,
     spill: Vec<Hit>,
 }
 
 impl NearHits {
     #[inline]
     fn push(&mut self, hit: Hit) {
-        if self.len < self.fixed.len() {
-            self.fixed[self.len] = Some(hit);
-            self.len += 1;
-        } else {
-            self.spill.push(hit);
+        if let Err(full) = self.fixed.try_push(hit) {
+            self.spill.push(full.element());
         }
     }
 
@@ -510,14 +520,17 @@ impl NearHits {
         mut retest: impl FnMut(&Hit, f32) -> Option<(f32, f32, f32)>,
         t_max: f32,
     ) -> Option<Hit> {
-        if !best_t.is_finite() && self.len == 0 {
-            return None;
+        // The first hit found is the best so far, so a lone hit is the answer.
+        match (self.fixed.as_slice(), self.spill.is_empty()) {
+            ([], _) => return None,
+            ([only], true) => return Some(*only),
+            _ => {}
         }
         let top = window(best_t);
         let mut candidates: Vec<Hit> = Vec::new();
         let mut single: Option<Hit> = None;
         let mut count = 0;
-        for h in self.fixed[..self.len].iter().flatten().chain(self.spill.iter()) {
+        for h in self.fixed.iter().chain(self.spill.iter()) {
             if h.t <= top {
                 count += 1;
                 if count == 1 {
