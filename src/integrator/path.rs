@@ -64,9 +64,7 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// How much larger than the surface gather's radius the volume gather's is:
-/// photons that scatter fill a volume, so they lie much farther apart.
-pub const VOLUME_RADIUS_SCALE: f32 = 4.0;
+pub use super::photon::VOLUME_RADIUS_SCALE;
 
 /// The caustic maps and how to gather them: `[first vertex, later ones]`.
 struct Caustics<'a> {

@@ -291,6 +291,7 @@ pub fn photon_map_from(traced: TracedPhotons, plan: &RenderPlan) -> Option<(Phot
         traced,
         precompute.as_ref(),
         plan.keep_photon_positions,
+        None,
     ))
 }
 

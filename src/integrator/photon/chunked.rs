@@ -488,7 +488,7 @@ fn morton_sort(points: &mut [[f32; 3]], order: &mut [u32], scratch: &mut MortonS
 
 /// Sorts `keys` by their high 30 bits (stable): three passes of a
 /// least-significant-digit radix sort, 10 bits each, through `buffer`.
-fn radix_sort_high(keys: &mut Vec<u64>, buffer: &mut Vec<u64>) {
+pub(super) fn radix_sort_high(keys: &mut Vec<u64>, buffer: &mut Vec<u64>) {
     buffer.clear();
     buffer.resize(keys.len(), 0);
     for pass in 0..3 {

@@ -71,6 +71,11 @@ pub fn cone_normalisation(cone_k: f32) -> f32 {
 /// path's first non-specular one gather (their blur is hidden by the bounce).
 pub const INDIRECT_GATHER_DIVISOR: usize = 4;
 
+/// How much larger than the surface gather's radius the path integrator's
+/// volume gather's is: photons that scatter fill a volume, so they lie
+/// much farther apart.
+pub const VOLUME_RADIUS_SCALE: f32 = 4.0;
+
 /// Integral of the cone filter over the volume-normalised ball:
 /// `∫_ball w dV / (4/3 π r³) = 3 ∫0^1 (1 − x/k_c) x² dx = 1 − 3/(4 k_c)`.
 #[inline]
@@ -107,10 +112,7 @@ impl PhotonMap {
             return Vec3A::ZERO;
         }
         let q = to_tree(&self.rotation, p);
-        let found = match g.fixed_radius {
-            Some(r) => self.tree.within(&q, r * r),
-            None => self.tree.nearest_n_within(&q, g.max_radius * g.max_radius, g.k),
-        };
+        let found = self.find(&q, g);
         if found.is_empty() {
             return Vec3A::ZERO;
         }
@@ -188,9 +190,7 @@ impl PhotonMap {
         if self.is_empty() || !self.near_bounds(p, g.max_radius) {
             return (Vec3A::ZERO, 0.0);
         }
-        let found = self
-            .tree
-            .nearest_n_within(&to_tree(&self.rotation, p), g.max_radius * g.max_radius, g.k);
+        let found = self.find(&to_tree(&self.rotation, p), g);
         self.estimate(&found, n, g)
     }
 
@@ -202,7 +202,15 @@ impl PhotonMap {
         if self.is_empty() || r2.is_nan() || r2 <= 0.0 || !self.near_bounds(p, r) {
             return (Vec3A::ZERO, 0.0);
         }
-        let found = self.tree.within(&to_tree(&self.rotation, p), r2);
+        let found = self.find(
+            &to_tree(&self.rotation, p),
+            &GatherParams {
+                k: NonZero::<usize>::MIN,
+                max_radius: r,
+                cone_k,
+                fixed_radius: Some(r),
+            },
+        );
         if found.is_empty() {
             return (Vec3A::ZERO, 0.0);
         }
@@ -239,6 +247,26 @@ impl PhotonMap {
             sum += rec.power() * cone_weight(nb.distance.sqrt(), r, g.cone_k);
         }
         (sum / (cone_normalisation(g.cone_k) * PI * r2), r)
+    }
+
+    /// The photons a gather at `q` (tree coordinates) sums: every one
+    /// within the fixed radius, or the `k` nearest within the largest
+    /// radius; from the grid when the map has one, else from the tree.
+    fn find(&self, q: &[f32; 3], g: &GatherParams) -> Vec<Neighbour> {
+        match (&self.grid, g.fixed_radius) {
+            (Some(grid), Some(r)) => {
+                let mut found = Vec::with_capacity(256);
+                grid.within(q, r * r, &mut found);
+                found
+            }
+            (Some(grid), None) => {
+                let mut found = Vec::with_capacity(4 * g.k.get());
+                grid.nearest_n_within(q, g.max_radius * g.max_radius, g.k, &mut found);
+                found
+            }
+            (None, Some(r)) => self.tree.within(q, r * r),
+            (None, None) => self.tree.nearest_n_within(q, g.max_radius * g.max_radius, g.k),
+        }
     }
 
     /// True when `p` is within `radius` of the map's bounds.
@@ -318,6 +346,52 @@ mod tests {
             (mean / want - Vec3A::ONE).abs().max_element() < 0.04,
             "{mean} vs {want}"
         );
+    }
+
+    /// A map whose gathers a grid answers gives a tree map's estimates
+    /// (the same photons with the same distances, summed in another
+    /// order): fixed-radius and k-nearest, weighted and irradiance.
+    #[test]
+    fn grid_map_gathers_as_the_tree_map() {
+        let n = 50_000;
+        let mut rng = Rng::new(11, Domain::Analysis, 0, 0);
+        let photons: Vec<Photon> = (0..n)
+            .map(|_| {
+                let (a, b) = rng.f32x2();
+                Photon {
+                    position: Vec3A::new((a - 0.5) * 4.0, 0.2 * a * a, (b - 0.5) * 4.0),
+                    incoming: Vec3A::new(0.3, 0.9, 0.1 - b).normalize(),
+                    normal: Vec3A::Y,
+                    power: Vec3A::new(1.0, 0.5, 0.25) * (rng.f32() / n as f32),
+                }
+            })
+            .collect();
+        let positions: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
+        let records: Vec<PhotonRecord> = photons.iter().map(|p| PhotonRecord::new(p.power, p.incoming)).collect();
+        let tree = PhotonMap::build(positions.clone(), records.clone(), false);
+        let radius = 0.15;
+        let grid = PhotonMap::build_with_grid(positions, records, false, Some(radius));
+        assert!(grid.memory_bytes() < tree.memory_bytes() * 3 / 2);
+        let close = |a: Vec3A, b: Vec3A| (a - b).abs().max_element() <= 1e-5 * a.max_element();
+        for fixed in [Some(radius), Some(radius * 0.4), None] {
+            let g = GatherParams {
+                k: NonZero::new(32).unwrap(),
+                max_radius: radius,
+                cone_k: 1.1,
+                fixed_radius: fixed,
+            };
+            for _ in 0..300 {
+                let (a, b) = rng.f32x2();
+                let p = Vec3A::new(a * 4.6 - 2.3, 0.1, b * 4.6 - 2.3);
+                let (t, s) = (
+                    tree.weighted_estimate(p, &g, Kernel::Disk, |r| r.power()),
+                    grid.weighted_estimate(p, &g, Kernel::Disk, |r| r.power()),
+                );
+                assert!(close(t, s), "{fixed:?} at {p}: {t} vs {s}");
+                let (t, s) = (tree.irradiance(p, Vec3A::Y, &g), grid.irradiance(p, Vec3A::Y, &g));
+                assert!(close(t, s), "{fixed:?} at {p}: {t} vs {s}");
+            }
+        }
     }
 
     /// With few photons per gather the k-th photon, which sets the radius,

@@ -28,6 +28,7 @@ pub mod chunked;
 pub mod emit;
 pub mod file;
 pub mod gather;
+pub mod grid;
 pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
@@ -35,7 +36,7 @@ pub mod progressive;
 
 pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, TraceSettings, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
-pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR};
+pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR, VOLUME_RADIUS_SCALE};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
 pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 
@@ -186,7 +187,7 @@ pub fn photon_pass_with(
     rules: PhotonRules,
 ) -> (PhotonMap, PhotonStats) {
     let traced = trace_photons_with(scene, settings, accel, count, precompute.is_some(), rules, 0);
-    build_photon_map(traced, precompute, keep_positions)
+    build_photon_map(traced, precompute, keep_positions, None)
 }
 
 /// The photons of a pass as traced, before the map is built: what
@@ -339,7 +340,11 @@ pub fn trace_photons_with(
 }
 
 /// Builds the caustic map from traced photons and, with `precompute`, the
-/// irradiance at the thinned sites (which `traced` must hold).
+/// irradiance at the thinned sites (which `traced` must hold). With
+/// `grid_radius`, the surface map's gathers are answered by a hashed grid
+/// for that radius instead of a tree, and the volume map's by one for
+/// [`VOLUME_RADIUS_SCALE`] times it ([`PhotonMap::build_with_grid`]:
+/// progressive photon mapping's fixed-radius gathers).
 ///
 /// # Panics
 /// With `precompute` when `traced.has_sites` is false.
@@ -347,6 +352,7 @@ pub fn build_photon_map(
     traced: TracedPhotons,
     precompute: Option<&Precompute>,
     keep_positions: bool,
+    grid_radius: Option<f32>,
 ) -> (PhotonMap, PhotonStats) {
     assert!(
         precompute.is_none() || traced.has_sites,
@@ -366,9 +372,14 @@ pub fn build_photon_map(
     let build_start = Instant::now();
     let stored = positions.len() as u64;
     let volume_stored = volume_positions.len() as u64;
-    let mut map = PhotonMap::build(positions, records, keep_positions);
+    let mut map = PhotonMap::build_with_grid(positions, records, keep_positions, grid_radius);
     if volume_stored > 0 {
-        map.volume = Some(Box::new(PhotonMap::build(volume_positions, volume_records, false)));
+        map.volume = Some(Box::new(PhotonMap::build_with_grid(
+            volume_positions,
+            volume_records,
+            false,
+            grid_radius.map(|r| r * VOLUME_RADIUS_SCALE),
+        )));
     }
     let build_time = build_start.elapsed();
     let precompute_start = Instant::now();

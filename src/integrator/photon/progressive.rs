@@ -136,7 +136,11 @@ impl ProgressiveSchedule {
             self.rules,
             photon_stream(sample),
         );
-        build_photon_map(traced, None, self.keep_positions)
+        // The path integrator's maps (physical rules) are gathered within
+        // this sample index's radius: a grid answers those gathers.
+        let grid_radius =
+            (self.rules == PhotonRules::Physical).then(|| radius_squared(self.r1, self.alpha, sample).sqrt());
+        build_photon_map(traced, None, self.keep_positions, grid_radius)
     }
 
     /// The gather of the sample index whose radius `seq` holds: every
