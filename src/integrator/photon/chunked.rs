@@ -184,6 +184,16 @@ impl Cuts {
     }
 }
 
+/// Squared Euclidean distance in kiddo's order of operations (its
+/// `SquaredEuclidean` sums the axes' squares from x to z), so that the
+/// grid's and the neighbourhood caches' distances equal the tree's bit for
+/// bit.
+#[inline]
+pub(super) fn distance2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+}
+
 /// A point's key along `axis`: its coordinate's bits mapped to an unsigned
 /// integer in the order of `f32::total_cmp`, then its index; a total order
 /// compared without branches.

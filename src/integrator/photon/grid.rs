@@ -28,7 +28,7 @@
 //! order of operations), so a query returns the same points with the same
 //! distances as the k-d tree's, in another order.
 
-use super::chunked::{radix_sort_high, Neighbour};
+use super::chunked::{distance2, radix_sort_high, Neighbour};
 use crate::math::sampling::morton_code;
 use rayon::prelude::*;
 use std::num::NonZero;
@@ -376,15 +376,6 @@ const GUESS_MARGIN: f32 = 1.25;
 #[inline]
 fn fine_cell(p: &[f32; 3], origin: &[f32; 3], inv_fine: f32) -> [u32; 3] {
     std::array::from_fn(|a| (((p[a] - origin[a]) * inv_fine).max(0.0) as u32).min(MAX_COORD))
-}
-
-/// Squared Euclidean distance, in kiddo's order of operations (its
-/// `SquaredEuclidean` sums the axes' squares from x to z), so that the
-/// grid's distances equal the tree's bit for bit.
-#[inline]
-fn distance2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 #[cfg(test)]

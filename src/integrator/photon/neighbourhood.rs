@@ -14,7 +14,7 @@
 //! sequence of queries may share one (a tile, a rayon task) without
 //! affecting determinism.
 
-use super::chunked::{ChunkedTree, Neighbour};
+use super::chunked::{distance2, ChunkedTree, Neighbour};
 use std::num::NonZero;
 
 /// Relative margin of the exactness test, far above the rounding of the
@@ -186,13 +186,6 @@ fn rank(q: &[f32; 3], points: &[([f32; 3], u32)], max_radius: f32, k: NonZero<us
         return max_radius;
     }
     out.last().map_or(max_radius, |nb| nb.distance.sqrt())
-}
-
-/// Squared Euclidean distance (kiddo's `SquaredEuclidean`, same order of operations).
-#[inline]
-fn distance2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 #[cfg(test)]
