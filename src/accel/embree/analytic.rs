@@ -5,6 +5,7 @@
 use super::sys;
 use crate::math::{Aabb, Ray, Vec3A};
 use crate::scene::{Cutouts, Cylinder, Disk, Quad, Sphere};
+use std::ffi::c_void;
 use std::sync::Arc;
 
 /// An analytic shape in the TLAS (user geometry data).
@@ -109,11 +110,46 @@ unsafe fn read_ray_n(base: *const f32, n: usize, i: usize) -> (Ray, f32, f32) {
     }
 }
 
-/// `RTCIntersectFunctionN` of the analytic shapes.
+/// Calls `lane(n, i)` for each of Embree's `n` lanes. `rtcIntersect1` and
+/// `rtcOccluded1` call with one lane (`N = 1`): that case is its own copy
+/// of the lane's code, with the structure-of-arrays index arithmetic
+/// folded away.
+#[inline(always)]
+fn each_lane(n: usize, mut lane: impl FnMut(usize, usize)) {
+    if n == 1 {
+        lane(1, 0);
+    } else {
+        for i in 0..n {
+            lane(n, i);
+        }
+    }
+}
+
+/// The shape and ray `(ray, tnear, tfar)` of lane `i` of `n`, or `None`
+/// when the lane is not valid.
 ///
-/// `rtcIntersect1` and `rtcOccluded1` call with one lane (`N = 1`): that
-/// case is its own copy of the lane's code, with the structure-of-arrays
-/// index arithmetic folded away.
+/// # Safety
+/// `valid` has `n` entries, `user` is a live `AnalyticGeometry`, `base`
+/// points to an `RTCRayN` of `n` lanes, and `i < n`.
+#[inline(always)]
+unsafe fn lane_ray<'a>(
+    valid: *const i32,
+    user: *const c_void,
+    base: *const f32,
+    n: usize,
+    i: usize,
+) -> Option<(&'a AnalyticGeometry, Ray, f32, f32)> {
+    // SAFETY: per the function contract.
+    unsafe {
+        if *valid.add(i) == 0 {
+            return None;
+        }
+        let (ray, tnear, tfar) = read_ray_n(base, n, i);
+        Some((&*(user as *const AnalyticGeometry), ray, tnear, tfar))
+    }
+}
+
+/// `RTCIntersectFunctionN` of the analytic shapes.
 pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
     args: *const sys::RTCIntersectFunctionNArguments,
 ) {
@@ -122,14 +158,7 @@ pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
     // from float 12N), and `geometryUserPtr` is our live `AnalyticGeometry`.
     unsafe {
         let args = &*args;
-        let n = args.N as usize;
-        if n == 1 {
-            intersect_lane::<MASKED>(args, 1, 0);
-        } else {
-            for i in 0..n {
-                intersect_lane::<MASKED>(args, n, i);
-            }
-        }
+        each_lane(args.N as usize, |n, i| intersect_lane::<MASKED>(args, n, i));
     }
 }
 
@@ -141,12 +170,10 @@ pub(super) unsafe extern "C" fn analytic_intersect<const MASKED: bool>(
 unsafe fn intersect_lane<const MASKED: bool>(args: &sys::RTCIntersectFunctionNArguments, n: usize, i: usize) {
     // SAFETY: per the function contract (see `analytic_intersect`).
     unsafe {
-        if *args.valid.add(i) == 0 {
-            return;
-        }
-        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let base = args.rayhit as *mut f32;
-        let (ray, tnear, tfar) = read_ray_n(base, n, i);
+        let Some((shape, ray, tnear, tfar)) = lane_ray(args.valid, args.geometryUserPtr, base, n, i) else {
+            return;
+        };
         let Some((t, u, v)) = shape.intersect::<MASKED>(&ray, tfar) else {
             return;
         };
@@ -169,20 +196,12 @@ unsafe fn intersect_lane<const MASKED: bool>(args: &sys::RTCIntersectFunctionNAr
     }
 }
 
-/// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit
-/// (one lane, `N = 1`, on its own path as in [`analytic_intersect`]).
+/// `RTCOccludedFunctionN` of the analytic shapes: tfar = −inf on a hit.
 pub(super) unsafe extern "C" fn analytic_occluded<const MASKED: bool>(args: *const sys::RTCOccludedFunctionNArguments) {
     // SAFETY: as in `analytic_intersect`, with `ray` an RTCRayN of `N` lanes.
     unsafe {
         let args = &*args;
-        let n = args.N as usize;
-        if n == 1 {
-            occluded_lane::<MASKED>(args, 1, 0);
-        } else {
-            for i in 0..n {
-                occluded_lane::<MASKED>(args, n, i);
-            }
-        }
+        each_lane(args.N as usize, |n, i| occluded_lane::<MASKED>(args, n, i));
     }
 }
 
@@ -194,12 +213,10 @@ pub(super) unsafe extern "C" fn analytic_occluded<const MASKED: bool>(args: *con
 unsafe fn occluded_lane<const MASKED: bool>(args: &sys::RTCOccludedFunctionNArguments, n: usize, i: usize) {
     // SAFETY: per the function contract (see `analytic_occluded`).
     unsafe {
-        if *args.valid.add(i) == 0 {
-            return;
-        }
-        let shape = &*(args.geometryUserPtr as *const AnalyticGeometry);
         let base = args.ray as *mut f32;
-        let (ray, tnear, tfar) = read_ray_n(base, n, i);
+        let Some((shape, ray, tnear, tfar)) = lane_ray(args.valid, args.geometryUserPtr, base, n, i) else {
+            return;
+        };
         if let Some((t, _, _)) = shape.intersect::<MASKED>(&ray, tfar) {
             if t >= tnear {
                 *base.add(8 * n + i) = f32::NEG_INFINITY;
