@@ -9,7 +9,7 @@ mod common;
 use caustic::accel;
 use caustic::accel::AccelOptions;
 use caustic::analysis::bench::default_accels;
-use caustic::integrator::{render::render, RenderPlan};
+use caustic::integrator::{render::render, RenderPlan, RenderSetup};
 use caustic::scene::{load_scene, LoadedScene};
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
 use std::hint::black_box;
@@ -33,7 +33,7 @@ fn render_group(c: &mut Criterion, label: &str, loaded: &LoadedScene) {
     for kind in default_accels() {
         let accel = accel::build(scene, kind, &AccelOptions::default()).expect("accelerator builds");
         group.bench_function(kind.name(), |b| {
-            b.iter(|| black_box(render(scene, accel.as_ref(), &plan, &|_, _| {})))
+            b.iter(|| black_box(render(scene, accel.as_ref(), &plan, RenderSetup::default())))
         });
     }
     group.finish();

@@ -31,7 +31,7 @@
 //! let caustic::scene::LoadedScene { scene, settings } = caustic::scene::parse_scene(text, Path::new("first.toml"))?;
 //! let accel = accel::build(&scene, AccelKind::KdTree, &AccelOptions::default())?;
 //! let plan = RenderPlan::new(&scene, &settings);
-//! let out = integrator::render(&scene, accel.as_ref(), &plan, &|_done, _total| {});
+//! let out = integrator::render(&scene, accel.as_ref(), &plan, integrator::RenderSetup::default());
 //! assert!(out.complete);
 //! assert!(out.film.mean().x > 0.0, "the lit sphere shows");
 //!

@@ -7,7 +7,7 @@ mod common;
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Accumulation;
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::math::{Vec3, Vec3A};
 use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, IntegratorKind, Light, Material, Mirror, RenderSettings, Scene};
@@ -77,7 +77,7 @@ fn render_acc_aovs(scene: &LoadedScene, threads: usize, aovs: bool) -> Accumulat
     let mut plan = RenderPlan::new(&scene.scene, &scene.settings);
     plan.aovs = aovs;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation)
+    pool.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()).accumulation)
 }
 
 #[test]

@@ -496,7 +496,7 @@ fn g() { let _ = "crate::integrator::render(…)"; }
     assert_eq!(code.len(), text.len());
     assert!(!names_render_entry(&code_of(text, false)));
     assert!(names_render_entry("use crate::integrator::{self, render, RenderPlan};"));
-    assert!(names_render_entry("let o = integrator::render_progressive(s);"));
+    assert!(names_render_entry("let o = integrator::render(s, a, p, setup);"));
     assert!(!names_render_entry(
         "use crate::integrator::{RenderPlan, RenderOutput};"
     ));

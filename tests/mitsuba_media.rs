@@ -9,7 +9,7 @@ mod common;
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::analysis::converge::read_exr;
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::math::Vec3A;
 use caustic::scene::mitsuba::load_mitsuba_scene;
 use caustic::scene::LoadedScene;
@@ -157,7 +157,7 @@ fn render_pixels(scene: &LoadedScene, threads: usize) -> Vec<Vec3A> {
     let accel = accel::build(&scene.scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
     out.film.pixels.iter().map(|p| Vec3A::from(*p)).collect()
 }
 

@@ -9,7 +9,7 @@ mod common;
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::integrator::photon::{trace_photons_with, PhotonRules};
 use caustic::integrator::plan::{MediumPlan, PhotonPlan};
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::scene::LoadedScene;
 use caustic::scene::{parse_scene, CausticsMode, IntegratorKind};
 use common::cli::caustic;
@@ -24,7 +24,7 @@ fn pixels(scene: &LoadedScene, threads: usize) -> Vec<[f64; 3]> {
     let accel = accel::build(&scene.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let out = pool.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
     assert_eq!(out.stats.dropped_samples, 0);
     out.film
         .pixels
@@ -415,30 +415,33 @@ fn photon_files_are_refused_for_the_path_integrators_maps() {
 #[test]
 fn map_caustics_resume_bit_for_bit() {
     use caustic::film::Accumulation;
-    use caustic::integrator::{render_with_control, RenderControl};
+    use caustic::integrator::{RenderControl, RenderSetup};
     for mut s in [scene(GLASS), scene(&water(0.05, 0.15, false, "caustics = \"map\""))] {
         s.settings.spp = 12;
         s.settings.photons.count = 40_000;
         let accel = accel::build(&s.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
         let plan = RenderPlan::new(&s.scene, &s.settings);
         let start = || Accumulation::new(plan.width, plan.height);
-        let full = render_with_control(
+        let full = render(
             &s.scene,
             accel.as_ref(),
             &plan,
-            start(),
-            &RenderControl::to_completion(&|_, _| {}),
+            RenderSetup::default().continuing(start()),
         );
         let mut first = RenderControl::to_completion(&|_, _| {});
         first.sample_limit = Some(4);
-        let part = render_with_control(&s.scene, accel.as_ref(), &plan, start(), &first);
-        assert!(part.accumulation.samples_taken() < full.accumulation.samples_taken());
-        let rest = render_with_control(
+        let part = render(
             &s.scene,
             accel.as_ref(),
             &plan,
-            part.accumulation,
-            &RenderControl::to_completion(&|_, _| {}),
+            RenderSetup::default().continuing(start()).control(first),
+        );
+        assert!(part.accumulation.samples_taken() < full.accumulation.samples_taken());
+        let rest = render(
+            &s.scene,
+            accel.as_ref(),
+            &plan,
+            RenderSetup::default().continuing(part.accumulation),
         );
         assert_eq!(rest.accumulation, full.accumulation);
     }

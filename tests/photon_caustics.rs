@@ -8,7 +8,7 @@ use caustic::accel::AccelKind;
 use caustic::film::Film;
 use caustic::integrator::photon::{photon_pass, PhotonMap, TraceSettings};
 use caustic::integrator::plan::PhotonPlan;
-use caustic::integrator::{render, render_with_photons, RenderPlan};
+use caustic::integrator::{render, PhotonInput, RenderPlan, RenderSetup};
 use caustic::math::Vec3A;
 use caustic::scene::LoadedScene;
 use caustic::scene::{
@@ -168,7 +168,13 @@ fn more_photons_give_lower_error_against_a_reference() {
     let accel = build(&dark.scene, AccelKind::Brute);
     let plan = RenderPlan::new(&dark.scene, &dark.settings);
     assert_eq!(plan.photons, PhotonPlan::CountZero);
-    let without = render_with_photons(&dark.scene, accel.as_ref(), &plan, None, &|_, _| {}).film;
+    let without = render(
+        &dark.scene,
+        accel.as_ref(),
+        &plan,
+        RenderSetup::default().photons(PhotonInput::Map(None)),
+    )
+    .film;
     // Under the sphere, its shadow in direct light holds the focused caustic.
     let brighter = reference
         .pixels
@@ -188,7 +194,7 @@ fn render_caustic(count: u64) -> Film {
     let scene = glass_scene(count);
     let accel = build(&scene.scene, AccelKind::Brute);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
-    render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).film
+    render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()).film
 }
 
 #[test]
@@ -198,7 +204,7 @@ fn photon_maps_and_images_are_identical_for_one_and_two_threads() {
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}))
+        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()))
     };
     let (one, two) = (run(1), run(2));
     assert_eq!(one.film, two.film);
@@ -216,6 +222,6 @@ fn no_photon_pass_without_a_specular_caster() {
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert_eq!(plan.photons, PhotonPlan::NoSpecularCaster);
     assert!(plan.to_string().contains("photon pass: skipped (no specular caster)"));
-    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     assert!(out.photon_map.is_none() && out.stats.photons.is_none());
 }

@@ -11,7 +11,7 @@ use caustic::accel::AccelKind;
 use caustic::film::shard::samples_merge_bound;
 use caustic::film::{Accumulation, ShardId, ShardMode, ShardSet};
 use caustic::integrator::plan::{PhotonPlan, ProgressivePlan};
-use caustic::integrator::{render, render_with_control, render_with_photons, RenderControl, RenderPlan};
+use caustic::integrator::{render, PhotonInput, RenderControl, RenderPlan, RenderSetup};
 use caustic::job::{self, merge_partials, JobHooks, MergeRequest, RenderJob, RenderRequest};
 use caustic::math::Vec3A;
 use caustic::scene::LoadedScene;
@@ -99,10 +99,16 @@ fn caustic_only(scene: &LoadedScene) -> Vec<f64> {
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert!(plan.runs_photons());
-    let with = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).film;
+    let with = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()).film;
     let mut dark = plan.clone();
     dark.photons = PhotonPlan::CountZero;
-    let without = render_with_photons(&scene.scene, accel.as_ref(), &dark, None, &|_, _| {}).film;
+    let without = render(
+        &scene.scene,
+        accel.as_ref(),
+        &dark,
+        RenderSetup::default().photons(PhotonInput::Map(None)),
+    )
+    .film;
     with.pixels
         .iter()
         .zip(&without.pixels)
@@ -221,7 +227,7 @@ fn plan_shares_the_photons_and_says_what_it_skips() {
     assert!(text.contains("precomputed irradiance skipped"), "{text}");
     // Rendering traces one map per sample index and counts them all.
     let accel = build(&scene.scene, AccelKind::KdTree);
-    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     let stats = out.stats.photons.as_ref().unwrap();
     assert_eq!((stats.maps, stats.emitted), (11, 11 * 1818));
     assert!(
@@ -238,7 +244,7 @@ fn same_image_on_one_and_three_threads() {
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}))
+        pool.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()))
     };
     let (one, three) = (run(1), run(3));
     assert!(one.film == three.film);
@@ -250,7 +256,7 @@ fn same_image_on_one_and_three_threads() {
         &fixed.scene,
         accel.as_ref(),
         &RenderPlan::new(&fixed.scene, &fixed.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     assert!(other.film != one.film);
 }
@@ -271,15 +277,21 @@ fn interrupt_and_resume(scene: &LoadedScene, stop_at: u64) -> (Accumulation, Acc
         cancel: Some(&cancel),
         ..RenderControl::to_completion(&progress)
     };
-    let first = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(w, h), &control);
-    assert!(!first.complete, "stopped at {stop_at}");
-    let partial = first.accumulation.clone();
-    let resumed = render_with_control(
+    let first = render(
         &scene.scene,
         accel.as_ref(),
         &plan,
-        first.accumulation,
-        &RenderControl::to_completion(&|_, _| {}),
+        RenderSetup::default()
+            .continuing(Accumulation::new(w, h))
+            .control(control),
+    );
+    assert!(!first.complete, "stopped at {stop_at}");
+    let partial = first.accumulation.clone();
+    let resumed = render(
+        &scene.scene,
+        accel.as_ref(),
+        &plan,
+        RenderSetup::default().continuing(first.accumulation),
     );
     assert!(resumed.complete);
     (partial, resumed.accumulation)
@@ -290,7 +302,7 @@ fn interrupted_and_resumed_is_bit_identical() {
     let scene = caustic_scene(11);
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
-    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
+    let reference = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()).accumulation;
     let total = 40 * 30 * 11;
     for stop_at in [1, total / 7, total / 3, total * 2 / 3] {
         let (partial, resumed) = interrupt_and_resume(&scene, stop_at);
@@ -306,7 +318,7 @@ fn interrupted_and_resumed_is_bit_identical() {
     adaptive.settings.min_spp = 8;
     let accel = build(&adaptive.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&adaptive.scene, &adaptive.settings);
-    let reference = render(&adaptive.scene, accel.as_ref(), &plan, &|_, _| {}).accumulation;
+    let reference = render(&adaptive.scene, accel.as_ref(), &plan, RenderSetup::default()).accumulation;
     assert!(reference.converged.iter().any(|&c| c), "some pixels stop early");
     assert!(reference.taken.contains(&24), "some pixels sample on");
     let stop_at = 40 * 30 * 5 + 100;

@@ -6,7 +6,7 @@ mod common;
 
 use caustic::accel::AccelKind;
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
-use caustic::integrator::{render, render_with_control, RenderControl, RenderOutput, RenderPlan};
+use caustic::integrator::{render, RenderControl, RenderOutput, RenderPlan, RenderSetup};
 use caustic::math::{SamplerKind, Vec3A};
 use caustic::scene::LoadedScene;
 use caustic::scene::{load_scene, AdaptiveGoal, IntegratorKind, Light};
@@ -36,7 +36,7 @@ fn pixels_stop_where_the_noise_is_low_and_the_error_estimate_follows_the_noise()
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert_eq!(plan.sampler, SamplerKind::Sobol);
-    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     let acc = &out.accumulation;
     assert!(out.complete);
     let (lo, hi) = acc.taken_range();
@@ -71,7 +71,7 @@ fn adaptive_stopping_does_not_bias_the_image() {
         &reference_scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&reference_scene.scene, &reference_scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let mean = |o: &RenderOutput| o.film.pixels.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>();
     let truth = mean(&reference);
@@ -89,7 +89,7 @@ fn adaptive_stopping_does_not_bias_the_image() {
                     &s.scene,
                     accel.as_ref(),
                     &RenderPlan::new(&s.scene, &s.settings),
-                    &|_, _| {},
+                    RenderSetup::default(),
                 );
                 assert!(out.accumulation.converged.iter().any(|&c| c));
                 mean(&out)
@@ -114,7 +114,7 @@ fn image_goal_spends_samples_in_proportion_to_the_noise() {
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let mut image_scene = scene.clone();
     image_scene.settings.adaptive_goal = AdaptiveGoal::Image;
@@ -122,7 +122,7 @@ fn image_goal_spends_samples_in_proportion_to_the_noise() {
         &image_scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&image_scene.scene, &image_scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let (p, i) = (pixel.accumulation.samples_taken(), image.accumulation.samples_taken());
     assert!(i < p, "image goal took {i} samples, pixel goal {p}");
@@ -170,12 +170,11 @@ fn early_stopped_whitted_pixels_sample_the_whole_light() {
             ..RenderControl::to_completion(&progress)
         };
         let start = Accumulation::new(s.settings.width, s.settings.height);
-        render_with_control(
+        render(
             &s.scene,
             accel.as_ref(),
             &RenderPlan::new(&s.scene, &s.settings),
-            start,
-            &control,
+            RenderSetup::default().continuing(start).control(control),
         )
         .film
     };
@@ -208,8 +207,8 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
     // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
     plan.aovs = true;
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-    let a = pool(1).install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
-    let b = pool(3).install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let a = pool(1).install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
+    let b = pool(3).install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
     assert_eq!(a.accumulation, b.accumulation);
 
     // Stop mid-way (after some tiles of a later pass), save a checkpoint,
@@ -227,7 +226,12 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
             ..RenderControl::to_completion(&progress)
         };
         let start = Accumulation::new(scene.settings.width, scene.settings.height);
-        let part = render_with_control(&scene.scene, accel.as_ref(), &plan, start, &control);
+        let part = render(
+            &scene.scene,
+            accel.as_ref(),
+            &plan,
+            RenderSetup::default().continuing(start).control(control),
+        );
         assert!(!part.complete);
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c.exr");
@@ -246,12 +250,11 @@ fn adaptive_renders_are_deterministic_across_threads_and_resume() {
         write_checkpoint(&path, &part.accumulation, &meta).unwrap();
         let resumed = read_checkpoint(&path).unwrap().accumulation;
         let done = pool(2).install(|| {
-            render_with_control(
+            render(
                 &scene.scene,
                 accel.as_ref(),
                 &plan,
-                resumed,
-                &RenderControl::to_completion(&|_, _| {}),
+                RenderSetup::default().continuing(resumed),
             )
         });
         assert_eq!(done.accumulation, a.accumulation, "stopped at {stop_at} of {total}");
@@ -275,7 +278,7 @@ fn adaptive_white_furnace_renders_the_environment() {
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let mean = out.film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / out.film.pixels.len() as f64;
     assert!((mean - 0.5).abs() < 0.005, "{mean}");

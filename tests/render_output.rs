@@ -3,7 +3,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::{check_writable, tonemap_to_srgb8, write_exr, write_png};
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::math::Vec3A;
 use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, Light, Material, Object, Quad, RenderSettings, Scene, Shape, Sphere};
@@ -59,7 +59,7 @@ fn rendered_film_round_trips_through_exr_and_png() {
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let dir = tempfile::tempdir().unwrap();
     let (png, exr_path) = (dir.path().join("img.png"), dir.path().join("img.exr"));

@@ -3,7 +3,7 @@
 //! environment), an area light seen directly, and determinism.
 
 use caustic::accel::{self, AccelKind, AccelOptions};
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::math::Vec3A;
 use caustic::scene::LoadedScene;
 use caustic::scene::{Camera, IntegratorKind, Light, Material, Object, RenderSettings, Scene, Shape, Sphere};
@@ -56,7 +56,7 @@ fn mean_and_spread(scene: &LoadedScene) -> (f64, f64) {
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let px: Vec<f64> = out
         .film
@@ -102,8 +102,8 @@ fn path_renders_are_deterministic_across_thread_counts() {
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
-    let a = one.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
-    let b = three.install(|| render(&scene.scene, accel.as_ref(), &plan, &|_, _| {}));
+    let a = one.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
+    let b = three.install(|| render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default()));
     assert_eq!(a.film.pixels, b.film.pixels);
 }
 
@@ -133,7 +133,7 @@ fn every_scene_renders_in_path_mode() {
             &scene.scene,
             accel.as_ref(),
             &RenderPlan::new(&scene.scene, &scene.settings),
-            &|_, _| {},
+            RenderSetup::default(),
         );
         assert_eq!(out.stats.dropped_samples, 0, "{}", path.display());
         assert!(out.film.pixels.iter().all(|p| p.is_finite()), "{}", path.display());

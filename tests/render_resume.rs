@@ -9,8 +9,10 @@ use caustic::accel::{Accel, AccelKind};
 use caustic::film::{read_checkpoint, write_checkpoint, Accumulation, CheckpointMeta};
 use caustic::integrator::photon::{PhotonMap, SiteCache};
 use caustic::integrator::render::PixelStrata;
-use caustic::integrator::whitted::{RayCounts, SampleContext, Whitted};
-use caustic::integrator::{render, render_with_control, CheckpointHook, RenderControl, RenderOutput, RenderPlan};
+use caustic::integrator::{
+    render, CheckpointHook, Integrator, RayCounts, RenderControl, RenderOutput, RenderPlan, RenderSetup, SampleContext,
+    Whitted,
+};
 use caustic::math::rng::mix64;
 use caustic::math::sampling::{grid_for, permute, stratified};
 use caustic::math::{Rng, Sampler, Vec3, Vec3A};
@@ -36,13 +38,7 @@ fn caustic_scene(spp: u32) -> LoadedScene {
 }
 
 fn continue_from(scene: &LoadedScene, accel: &dyn Accel, plan: &RenderPlan, start: Accumulation) -> RenderOutput {
-    render_with_control(
-        &scene.scene,
-        accel,
-        plan,
-        start,
-        &RenderControl::to_completion(&|_, _| {}),
-    )
+    render(&scene.scene, accel, plan, RenderSetup::default().continuing(start))
 }
 
 #[test]
@@ -51,7 +47,7 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     assert!(plan.spread(), "the test should cover spread sampling");
-    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let reference = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     assert!(reference.complete);
     assert!(reference.stats.photons.is_some(), "the photon pass should run");
 
@@ -72,7 +68,14 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
             cancel: Some(&cancel),
             ..RenderControl::to_completion(&progress)
         };
-        let first = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+        let first = render(
+            &scene.scene,
+            accel.as_ref(),
+            &plan,
+            RenderSetup::default()
+                .continuing(Accumulation::new(40, 30))
+                .control(control),
+        );
         assert!(!first.complete, "stopped at {stop_at}");
         let taken = first.accumulation.samples_taken();
         assert!(
@@ -104,7 +107,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
     let mut plan = RenderPlan::new(&scene.scene, &scene.settings);
     // A render that checkpoints keeps every buffer (as `caustic render`'s job does).
     (plan.aovs, plan.noise) = (true, true);
-    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let reference = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
 
     // A limit off the pass boundaries (passes go to 4, 6): the resume
     // then groups the samples into other passes than the reference did.
@@ -112,7 +115,14 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         sample_limit: Some(3),
         ..RenderControl::to_completion(&|_, _| {})
     };
-    let preview = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    let preview = render(
+        &scene.scene,
+        accel.as_ref(),
+        &plan,
+        RenderSetup::default()
+            .continuing(Accumulation::new(40, 30))
+            .control(control),
+    );
     // The partial image covers the whole frame at 3 spp: no black tiles.
     assert_eq!(preview.accumulation.taken_range(), (3, 3));
     assert!(!preview.complete);
@@ -162,9 +172,17 @@ fn every_periodic_snapshot_resumes_to_the_same_image() {
     };
     // Two threads: snapshots are taken while the other worker renders.
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    let full =
-        pool.install(|| render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control));
-    let reference = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let full = pool.install(|| {
+        render(
+            &scene.scene,
+            accel.as_ref(),
+            &plan,
+            RenderSetup::default()
+                .continuing(Accumulation::new(40, 30))
+                .control(control),
+        )
+    });
+    let reference = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     assert!(full.film == reference.film, "checkpointing must not change the image");
 
     let snapshots = snapshots.into_inner().unwrap();
@@ -195,7 +213,14 @@ fn a_render_cancelled_before_it_starts_takes_no_sample() {
         cancel: Some(&cancel),
         ..RenderControl::to_completion(&|_, _| {})
     };
-    let out = render_with_control(&scene.scene, accel.as_ref(), &plan, Accumulation::new(40, 30), &control);
+    let out = render(
+        &scene.scene,
+        accel.as_ref(),
+        &plan,
+        RenderSetup::default()
+            .continuing(Accumulation::new(40, 30))
+            .control(control),
+    );
     assert_eq!(out.accumulation.samples_taken(), 0);
     assert!(out.stats.photons.is_none(), "the photon pass is skipped too");
     assert!(!out.complete);
@@ -234,7 +259,7 @@ fn single_loop_film(scene: &LoadedScene, accel: &dyn Accel, plan: &RenderPlan, m
                     counts: &mut counts,
                     sites: &mut SiteCache::default(),
                 };
-                let l = integrator.radiance(&ray, 0, &mut ctx);
+                let l = integrator.radiance(&ray, None, &mut ctx);
                 if l.is_finite() {
                     sum += l;
                     kept += 1;
@@ -251,7 +276,7 @@ fn passes_give_the_single_loop_image_bit_for_bit() {
     let scene = caustic_scene(13);
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
-    let out = render(&scene.scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
     let expected = single_loop_film(&scene, accel.as_ref(), &plan, out.photon_map.as_deref());
     assert!(out.film.pixels == expected, "the pass loop changed the image");
 }

@@ -3,7 +3,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Film;
-use caustic::integrator::{render, RenderOutput, RenderPlan};
+use caustic::integrator::{render, RenderOutput, RenderPlan, RenderSetup};
 use caustic::math::{Vec3, Vec3A};
 use caustic::scene::{
     AreaLight, Camera, Dielectric, Light, LoadedScene, Material, Mirror, Object, Quad, RenderSettings, SampleSharing,
@@ -52,7 +52,7 @@ fn camera(pos: [f32; 3], at: [f32; 3], up: [f32; 3], fov: f32) -> Camera {
 fn render_scene(s: &LoadedScene) -> RenderOutput {
     let accel = accel::build(&s.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
     let plan = RenderPlan::new(&s.scene, &s.settings);
-    render(&s.scene, accel.as_ref(), &plan, &|_, _| {})
+    render(&s.scene, accel.as_ref(), &plan, RenderSetup::default())
 }
 
 /// Film coordinates (pixels, origin top-left) of world point `p`.
@@ -432,9 +432,12 @@ fn progress_reports_every_pixel() {
     let accel = accel::build(&scene.scene, AccelKind::Brute, &AccelOptions::default()).unwrap();
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
     let calls = std::sync::Mutex::new(Vec::new());
-    render(&scene.scene, accel.as_ref(), &plan, &|done, total| {
-        calls.lock().unwrap().push((done, total))
-    });
+    render(
+        &scene.scene,
+        accel.as_ref(),
+        &plan,
+        RenderSetup::default().progress(&|done, total| calls.lock().unwrap().push((done, total))),
+    );
     let mut calls = calls.into_inner().unwrap();
     calls.sort();
     // 64×48 pixels in 32×32 tiles: 2 × 2 tiles.

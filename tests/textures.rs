@@ -6,7 +6,7 @@
 mod common;
 
 use caustic::accel::{self, Accel, AccelKind, AccelOptions};
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::math::{Ray, Vec2, Vec3A};
 use caustic::scene::LoadedScene;
 use caustic::scene::{parse_scene, SceneError};
@@ -234,7 +234,7 @@ material = \"m\"
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     );
     let left = out.film.get(10, 16);
     let right = out.film.get(22, 16);

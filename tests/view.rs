@@ -6,7 +6,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Accumulation;
-use caustic::integrator::{self, RenderControl, RenderPlan};
+use caustic::integrator::{self, PhotonInput, RenderControl, RenderPlan, RenderSetup};
 use caustic::math::Vec3A;
 use caustic::scene::LoadedScene;
 use caustic::view::{EditableScene, ViewerCore};
@@ -33,9 +33,17 @@ fn batch_image(scene: &LoadedScene, spp: u32) -> Vec<caustic::math::Vec3> {
         ..RenderControl::to_completion(&|_, _| {})
     };
     let start = Accumulation::new(plan.width, plan.height);
-    integrator::render_progressive(&scene.scene, &*accel, &plan, map.as_ref(), start, &control)
-        .film
-        .pixels
+    integrator::render(
+        &scene.scene,
+        &*accel,
+        &plan,
+        RenderSetup::default()
+            .continuing(start)
+            .photons(PhotonInput::Map(map.as_ref()))
+            .control(control),
+    )
+    .film
+    .pixels
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! Integrators: the render plan, the photon pass (caustics), fog, the
-//! Whitted integrator, the path tracer and its light sampling, the progressive deterministic render loop and the
-//! debug overlays.
+//! [`Integrator`] interface (one pixel sample's radiance) and its Whitted,
+//! path and volumetric path tracers, light sampling, the progressive
+//! deterministic render loop ([`render()`], the one way in) and the debug
+//! overlays.
 
 pub mod aov;
 pub mod debug;
@@ -12,12 +14,14 @@ pub mod path;
 pub mod photon;
 pub mod plan;
 pub mod render;
+pub mod sample;
 pub mod volpath;
 pub mod whitted;
 
 pub use plan::RenderPlan;
 pub use render::{
-    photon_map_from, planned_photons, render, render_progressive, render_with_control, render_with_photons,
-    render_with_traced, CheckpointHook, RenderControl, RenderOutput, RenderStats,
+    photon_map_from, planned_photons, render, CheckpointHook, PhotonInput, RenderControl, RenderOutput, RenderSetup,
+    RenderStats,
 };
-pub use whitted::{RayCounts, Whitted};
+pub use sample::{Integrator, RayCounts, SampleContext};
+pub use whitted::Whitted;

@@ -43,7 +43,8 @@ use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
 use super::photon::{GatherParams, Kernel, PhotonMap, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
 use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
-use super::whitted::{RayCounts, SHADOW_EPSILON};
+use super::sample::{Integrator, RayCounts, SampleContext};
+use super::whitted::SHADOW_EPSILON;
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
 use crate::geometry::Hit;
@@ -160,21 +161,10 @@ impl<'a> PathTracer<'a> {
     }
 
     /// Radiance arriving along `ray` toward its origin, from the path's own
-    /// random stream.
-    pub fn radiance(&self, ray: &Ray, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
-        self.radiance_from(ray, None, rng, counts)
-    }
-
-    /// [`radiance`](Self::radiance) with the nearest hit of `ray` already
-    /// found (`Some(hit)`, `hit` itself `None` for a miss), as the AOV
-    /// tracer finds it for the same camera ray.
-    pub fn radiance_from(
-        &self,
-        ray: &Ray,
-        mut first: Option<Option<Hit>>,
-        rng: &mut Sampler,
-        counts: &mut RayCounts,
-    ) -> Vec3A {
+    /// random stream, starting from the ray's nearest hit when it is
+    /// already found (`Some(hit)`, `hit` itself `None` for a miss), as the
+    /// AOV tracer finds it for the same camera ray.
+    fn trace(&self, ray: &Ray, mut first: Option<Option<Hit>>, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;
@@ -448,6 +438,12 @@ impl<'a> PathTracer<'a> {
             *beta /= survive;
         }
         true
+    }
+}
+
+impl Integrator for PathTracer<'_> {
+    fn radiance(&self, ray: &Ray, first_hit: Option<Option<Hit>>, ctx: &mut SampleContext) -> Vec3A {
+        self.trace(ray, first_hit, &mut ctx.rng, ctx.counts)
     }
 }
 

@@ -17,11 +17,13 @@ use super::aov::{AovTracer, AOV_SAMPLES};
 use super::path::PathTracer;
 use super::photon::progressive::ProgressiveSchedule;
 use super::photon::{
-    build_photon_map, photon_pass_with, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute, SiteCache,
-    TracedPhotons,
+    build_photon_map, photon_pass_with, CausticsSource, GatherMode, GatherParams, PhotonMap, PhotonStats, Precompute,
+    SiteCache, TracedPhotons,
 };
 use super::plan::{Adaptive, PhotonPlan, RenderPlan};
-use super::whitted::{RayCounts, SampleContext, Whitted};
+use super::sample::{Integrator, RayCounts, SampleContext};
+use super::volpath::VolumePathTracer;
+use super::whitted::Whitted;
 use crate::accel::Accel;
 use crate::film::{Accumulation, Buffers, Film};
 use crate::math::rng::Domain;
@@ -133,6 +135,7 @@ pub struct RenderOutput {
 }
 
 /// Periodic saving of the accumulation during a render.
+#[derive(Clone, Copy)]
 pub struct CheckpointHook<'a> {
     /// Least time between two saves.
     pub every: Duration,
@@ -144,6 +147,7 @@ pub struct CheckpointHook<'a> {
 }
 
 /// How a render is driven: when it stops early and what it reports.
+#[derive(Clone, Copy)]
 pub struct RenderControl<'a> {
     /// When set (by a signal handler, another thread, a test), workers stop
     /// before their next pixel; the render returns what it has.
@@ -295,106 +299,85 @@ pub fn photon_map_from(traced: TracedPhotons, plan: &RenderPlan) -> Option<(Phot
     ))
 }
 
-/// Renders `scene` as `plan` says, on the current rayon pool: the photon
-/// pass first when the plan runs it, then the image.
-/// `progress(done_samples, total_samples)` is called after each tile (from
-/// worker threads, in completion order).
-pub fn render(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> RenderOutput {
-    let start = Accumulation::new(plan.width, plan.height);
-    render_with_control(scene, accel, plan, start, &RenderControl::to_completion(progress))
+/// Where the photon map of a render whose plan runs a photon pass comes from.
+#[derive(Default)]
+pub enum PhotonInput<'a> {
+    /// The render traces it before the image (progressive photon mapping
+    /// traces one per sample index during the passes instead).
+    #[default]
+    Trace,
+    /// Built from photons traced beforehand (a photon file: the same map,
+    /// so the same image). See [`photon_map_from`].
+    Traced(TracedPhotons),
+    /// Built by the caller (the viewer keeps one across renders), or
+    /// `None`: no photon pass runs and the render has no map.
+    Map(Option<&'a PhotonMap>),
 }
 
-/// Like [`render`], continuing from `start` (a fresh or resumed
-/// accumulation) under `control`. A render cancelled before it begins, or
-/// with nothing left to render, skips the photon pass and returns `start`
-/// unchanged.
-///
-/// # Panics
-/// If `start` is not `plan.width × plan.height` (callers check a resumed
-/// checkpoint against the scene first).
-pub fn render_with_control(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    start: Accumulation,
-    control: &RenderControl,
-) -> RenderOutput {
-    render_with_traced(scene, accel, plan, None, start, control)
+/// What [`render`] starts from and how it is driven. The default renders
+/// a fresh image to completion, tracing its photons, reporting nothing.
+pub struct RenderSetup<'a> {
+    /// The accumulation to continue (a resumed checkpoint, a viewer's
+    /// earlier passes); `None`: a fresh one of the plan's size.
+    pub start: Option<Accumulation>,
+    /// Where the caustic map comes from.
+    pub photons: PhotonInput<'a>,
+    /// When to stop early, checkpoints and progress.
+    pub control: RenderControl<'a>,
 }
 
-/// Like [`render_with_control`], with the photons traced beforehand when
-/// `traced` is given (a photon file; see [`photon_map_from`]).
-///
-/// # Panics
-/// As [`render_with_control`] and [`photon_map_from`].
-pub fn render_with_traced(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    traced: Option<TracedPhotons>,
-    start: Accumulation,
-    control: &RenderControl,
-) -> RenderOutput {
-    let begin = Instant::now();
-    let spp = plan.spp.max(1);
-    let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
-    // Nothing to render (every pixel still sampling is at the limit, or
-    // none is: converged, or another shard's): no photon pass either.
-    let photons = if control.cancelled() || start.active_level().is_none_or(|level| level >= limit) {
-        None
-    } else {
-        match traced {
-            Some(traced) => photon_map_from(traced, plan),
-            None => photon_pass_for(scene, accel, plan),
+impl Default for RenderSetup<'_> {
+    fn default() -> Self {
+        Self {
+            start: None,
+            photons: PhotonInput::Trace,
+            control: RenderControl::to_completion(&no_progress),
         }
-    };
-    let (map, photon_stats) = match photons {
-        Some((map, stats)) => (Some(Arc::new(map)), Some(stats)),
-        None => (None, None),
-    };
-    let mut out = render_progressive(scene, accel, plan, map.as_deref(), start, control);
-    out.stats.wall_time = begin.elapsed();
-    // Progressive photon mapping's maps are the pass loop's own.
-    if photon_stats.is_some() {
-        out.stats.photons = photon_stats;
-        out.photon_map = map;
     }
-    out
 }
 
-/// Renders the image with a given caustic map (or none), without running
-/// the photon pass: for callers that build or reuse the map themselves.
-pub fn render_with_photons(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    photons: Option<&PhotonMap>,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> RenderOutput {
-    let start = Accumulation::new(plan.width, plan.height);
-    render_progressive(
-        scene,
-        accel,
-        plan,
-        photons,
-        start,
-        &RenderControl::to_completion(progress),
-    )
+impl<'a> RenderSetup<'a> {
+    /// Continue `start` instead of a fresh accumulation.
+    pub fn continuing(self, start: Accumulation) -> Self {
+        Self {
+            start: Some(start),
+            ..self
+        }
+    }
+
+    /// Take the photon map from `photons`.
+    pub fn photons(self, photons: PhotonInput<'a>) -> Self {
+        Self { photons, ..self }
+    }
+
+    /// Drive the render by `control`.
+    pub fn control(self, control: RenderControl<'a>) -> Self {
+        Self { control, ..self }
+    }
+
+    /// Render to completion, reporting to `progress`.
+    pub fn progress(self, progress: &'a (dyn Fn(u64, u64) + Sync)) -> Self {
+        self.control(RenderControl::to_completion(progress))
+    }
 }
 
-/// The pass loop: continues `start` with the given caustic map (or none)
-/// until every pixel has `plan.spp` samples, the sample limit is reached or
-/// the render is cancelled.
+fn no_progress(_done: u64, _total: u64) {}
+
+/// Renders `scene` as `plan` says, on the current rayon pool: every render
+/// of caustic goes through here (files, resumes, shards, the viewer, the
+/// benchmarks).
 ///
-/// With progressive photon mapping ([`progressive_schedule`]) `photons` is
-/// not used: each pass renders its sample indices `s` one at a time, every
-/// pixel's sample `s` with map `s`, traced just before (and dropped once
-/// the next is needed, so one map lives at a time) and gathered within
+/// The photon pass runs first when the plan has one and `setup` asks for
+/// it; a render cancelled before it begins, or with nothing left to render
+/// (every pixel still sampling is at the limit, or none is: converged, or
+/// another shard's), skips it and returns its start unchanged. Then the
+/// pass loop continues the accumulation until every pixel has `plan.spp`
+/// samples, the sample limit is reached or the render is stopped.
+///
+/// With progressive photon mapping ([`progressive_schedule`]) a given map
+/// is not used: each pass renders its sample indices `s` one at a time,
+/// every pixel's sample `s` with map `s`, traced just before (and dropped
+/// once the next is needed, so one map lives at a time) and gathered within
 /// `r_{s+1}`. A pixel's sample `s` is then the same whatever the passes,
 /// threads, shards or interruptions, as without photons; the passes end at
 /// the sample counts of an uninterrupted render's (4, 8, 16, …) even after
@@ -403,17 +386,18 @@ pub fn render_with_photons(
 /// totals in the statistics.
 ///
 /// # Panics
-/// If `start` is not `plan.width × plan.height`.
-pub fn render_progressive(
-    scene: &Scene,
-    accel: &dyn Accel,
-    plan: &RenderPlan,
-    photons: Option<&PhotonMap>,
-    start: Accumulation,
-    control: &RenderControl,
-) -> RenderOutput {
+/// If `setup.start` is not `plan.width × plan.height` (callers check a
+/// resumed checkpoint against the scene first), or as [`photon_map_from`].
+pub fn render(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, setup: RenderSetup) -> RenderOutput {
     let begin = Instant::now();
+    let RenderSetup {
+        start,
+        photons,
+        control,
+    } = setup;
+    let control = &control;
     let (width, height) = (plan.width, plan.height);
+    let start = start.unwrap_or_else(|| Accumulation::new(width, height));
     assert!(
         start.width == width && start.height == height && start.len() == width as usize * height as usize,
         "accumulation is {}×{}, the plan {width}×{height}",
@@ -424,13 +408,19 @@ pub fn render_progressive(
     let limit = control.sample_limit.map_or(spp, |l| l.min(spp));
     let total = width as u64 * height as u64 * spp as u64;
 
-    let schedule = progressive_schedule(plan);
-    let integrator = tracer(
-        scene,
-        accel,
-        plan,
-        photons.filter(|_| schedule.is_none()).map(|m| (m, None)),
-    );
+    let idle = control.cancelled() || start.active_level().is_none_or(|level| level >= limit);
+    let (given, traced) = match photons {
+        PhotonInput::Map(map) => (map, None),
+        _ if idle => (None, None),
+        PhotonInput::Trace => (None, photon_pass_for(scene, accel, plan)),
+        PhotonInput::Traced(photons) => (None, photon_map_from(photons, plan)),
+    };
+    let (traced_map, traced_stats) = match traced {
+        Some((map, stats)) => (Some(Arc::new(map)), Some(stats)),
+        None => (None, None),
+    };
+    let caustics = CausticsSource::new(progressive_schedule(plan), given.or(traced_map.as_deref()));
+    let integrator = tracer(scene, accel, plan, caustics.fixed_map().map(|m| (m, None)));
     let aovs = AovTracer::new(scene, accel);
     let stop = Stop {
         cancel: control.cancel,
@@ -465,9 +455,16 @@ pub fn render_progressive(
             if level >= a.min_spp && level < limit {
                 let mut acc = snapshot(&states, width, height);
                 if mark_converged(&mut acc, &a, level) > 0 {
+                    // Only the decisions go back to the tiles.
                     for state in &states {
                         let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
-                        s.acc = acc.region(s.tile.x0, s.tile.y0, s.tile.x1, s.tile.y1);
+                        let tile = s.tile;
+                        let tw = (tile.x1 - tile.x0) as usize;
+                        for y in tile.y0..tile.y1 {
+                            let row = y as usize * width as usize + tile.x0 as usize;
+                            let local = (y - tile.y0) as usize * tw;
+                            s.acc.converged[local..local + tw].copy_from_slice(&acc.converged[row..row + tw]);
+                        }
                     }
                     level = acc.active_level().unwrap_or(limit);
                 }
@@ -476,7 +473,7 @@ pub fn render_progressive(
         if level >= limit || stop.is_due() {
             break;
         }
-        let run_pass = |integrator: &Tracer, target: u32| -> Vec<PassWork> {
+        let run_pass = |integrator: &dyn Integrator, target: u32| -> Vec<PassWork> {
             states
                 .par_iter()
                 .map(|state| {
@@ -501,9 +498,11 @@ pub fn render_progressive(
                 })
                 .collect()
         };
-        let work = match &schedule {
-            None => run_pass(&integrator, next_pass_target(level, limit)),
-            Some(schedule) => {
+        let work = match &caustics {
+            CausticsSource::None | CausticsSource::Map(_) => {
+                run_pass(integrator.as_ref(), next_pass_target(level, limit))
+            }
+            CausticsSource::PerSample(schedule) => {
                 // Progressive photon mapping: sample index by sample index,
                 // each with its own map and radius. Every pixel still
                 // sampling has at least `level` samples and needs every
@@ -520,7 +519,7 @@ pub fn render_progressive(
                     let (map, map_stats) = schedule.trace(scene, accel, s);
                     photon_totals.get_or_insert_with(PhotonStats::default).add(&map_stats);
                     let pass_tracer = tracer(scene, accel, plan, Some((&map, Some(schedule.gather_at(&radii)))));
-                    work.extend(run_pass(&pass_tracer, s + 1));
+                    work.extend(run_pass(pass_tracer.as_ref(), s + 1));
                     drop(pass_tracer);
                     last_map = Some(Arc::new(map));
                     radii.advance();
@@ -538,16 +537,18 @@ pub fn render_progressive(
         }
     }
 
+    // The integrator borrows the traced map, which the output takes.
+    drop(integrator);
     let accumulation = assemble(states, width, height);
     stats.wall_time = begin.elapsed();
-    stats.photons = photon_totals;
+    stats.photons = photon_totals.or(traced_stats);
     RenderOutput {
         film: accumulation.to_film(),
         complete: accumulation.is_complete(spp),
         timed_out: control.deadline.is_some_and(|d| Instant::now() >= d) && !accumulation.is_complete(spp),
         accumulation,
         stats,
-        photon_map: last_map,
+        photon_map: last_map.or(traced_map),
     }
 }
 
@@ -578,7 +579,7 @@ fn tracer<'a>(
     accel: &'a dyn Accel,
     plan: &'a RenderPlan,
     caustics: Option<(&'a PhotonMap, Option<GatherParams>)>,
-) -> Tracer<'a> {
+) -> Box<dyn Integrator + 'a> {
     match plan.integrator {
         IntegratorKind::Whitted => {
             let mut w = Whitted::new(scene, accel, plan);
@@ -587,11 +588,10 @@ fn tracer<'a>(
                 Some((map, Some(g))) => w = w.with_photons_gathered(map, g),
                 None => {}
             }
-            Tracer::Whitted(w)
+            Box::new(w)
         }
-        IntegratorKind::Path if scene.is_volumetric() => {
-            Tracer::Volume(Box::new(super::volpath::VolumePathTracer::new(scene, accel, plan)))
-        }
+        // Media bounded by surfaces, or null surfaces (Mitsuba's `volpath`).
+        IntegratorKind::Path if scene.is_volumetric() => Box::new(VolumePathTracer::new(scene, accel, plan)),
         IntegratorKind::Path => {
             let mut p = PathTracer::new(scene, accel, plan);
             match caustics {
@@ -599,7 +599,7 @@ fn tracer<'a>(
                 Some((map, Some(g))) => p = p.with_photons_gathered(map, g),
                 None => {}
             }
-            Tracer::Path(Box::new(p))
+            Box::new(p)
         }
     }
 }
@@ -754,14 +754,6 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
     stopped
 }
 
-/// The integrator a render uses.
-enum Tracer<'a> {
-    Whitted(Whitted<'a>),
-    Path(Box<PathTracer<'a>>),
-    /// Media bounded by surfaces, or null surfaces (Mitsuba's `volpath`).
-    Volume(Box<super::volpath::VolumePathTracer<'a>>),
-}
-
 /// The camera rays of a render's pixel samples: what is shared by every
 /// pixel, computed once per pass.
 struct CameraSamples<'a> {
@@ -868,7 +860,7 @@ pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &m
 /// once `cancel` is set.
 fn render_tile_pass(
     scene: &Scene,
-    integrator: &Tracer,
+    integrator: &dyn Integrator,
     aovs: &AovTracer,
     plan: &RenderPlan,
     state: &mut TileState,
@@ -907,7 +899,7 @@ fn render_tile_pass(
                 false => (Vec3A::ZERO, Vec3A::ZERO),
             };
             for k in first..target {
-                let (ray, mut rng) = samples.ray(k);
+                let (ray, rng) = samples.ray(k);
                 out.rays.camera += 1;
                 // The camera ray's hit, when the AOVs found it first.
                 let mut first = None;
@@ -918,21 +910,15 @@ fn render_tile_pass(
                     normal += n;
                     first = Some(hit);
                 }
-                let l = match integrator {
-                    Tracer::Whitted(whitted) => {
-                        let mut ctx = SampleContext {
-                            rng,
-                            slot: strata.slot(k),
-                            light_seed: strata.light_seed(),
-                            fresnel_stratum: strata.fresnel_stratum(k),
-                            counts: &mut out.rays,
-                            sites: &mut sites,
-                        };
-                        whitted.radiance(&ray, 0, &mut ctx)
-                    }
-                    Tracer::Path(path) => path.radiance_from(&ray, first, &mut rng, &mut out.rays),
-                    Tracer::Volume(path) => path.radiance(&ray, &mut rng, &mut out.rays),
+                let mut ctx = SampleContext {
+                    rng,
+                    slot: strata.slot(k),
+                    light_seed: strata.light_seed(),
+                    fresnel_stratum: strata.fresnel_stratum(k),
+                    counts: &mut out.rays,
+                    sites: &mut sites,
                 };
+                let l = integrator.radiance(&ray, first, &mut ctx);
                 out.samples += 1;
                 if l.is_finite() {
                     let l = l.min(Vec3A::splat(SAMPLE_RADIANCE_LIMIT));

@@ -43,7 +43,8 @@ use super::lights::LightSampler;
 use super::medium::{Flight, Homogeneous};
 use super::path::power_heuristic;
 use super::plan::{RenderPlan, ROULETTE_DEPTH};
-use super::whitted::{RayCounts, SHADOW_EPSILON};
+use super::sample::{Integrator, RayCounts, SampleContext};
+use super::whitted::SHADOW_EPSILON;
 use crate::accel::Accel;
 use crate::bsdf::dielectric::thin_sheet_reflectance;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
@@ -164,7 +165,7 @@ impl<'a> VolumePathTracer<'a> {
 
     /// Radiance arriving along `ray` toward its origin, from the path's own
     /// random stream.
-    pub fn radiance(&self, ray: &Ray, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
+    fn trace(&self, ray: &Ray, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;
@@ -410,5 +411,12 @@ impl<'a> VolumePathTracer<'a> {
             *beta /= survive;
         }
         true
+    }
+}
+impl Integrator for VolumePathTracer<'_> {
+    /// The camera ray's radiance, its hit found again (the ray may start
+    /// inside a medium, which the first query's hit does not tell).
+    fn radiance(&self, ray: &Ray, _first_hit: Option<Option<crate::geometry::Hit>>, ctx: &mut SampleContext) -> Vec3A {
+        self.trace(ray, &mut ctx.rng, ctx.counts)
     }
 }

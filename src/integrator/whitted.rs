@@ -42,18 +42,18 @@
 //!   toward the fog colour by its length inside the medium (`fog.rs`).
 
 use super::fog;
-use super::photon::{GatherParams, PhotonMap, SiteCache};
+use super::photon::{GatherParams, PhotonMap};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
+use super::sample::{Integrator, SampleContext};
 use crate::accel::Accel;
 use crate::bsdf::phong;
 use crate::bsdf::specular::{reflect, DielectricInterface};
 use crate::bsdf::{Bsdf, FresnelModel, LobeFlags, WhittedKind, WhittedSurface};
 use crate::math::sampling::{stratified, stratum_order};
-use crate::math::{offset_ray_origin, Frame, Ray, Sampler, Vec2, Vec3A};
+use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3A};
 use crate::scene::light::{bounding_sphere, Emitter, EnvironmentMap};
 use crate::scene::{Dielectric, Light, Material, Medium, Quad, Scene, SurfaceInteraction};
 use std::f32::consts::PI;
-use std::ops::AddAssign;
 use std::sync::Arc;
 
 /// A shadow ray toward a light sample at distance `d` is tested on
@@ -61,54 +61,6 @@ use std::sync::Arc;
 /// scale, and it keeps geometry coplanar with an area light (a ceiling the
 /// light is flush with) from occluding it (pbrt's `ShadowEpsilon`).
 pub const SHADOW_EPSILON: f32 = 1.0e-4;
-
-/// Rays cast, by kind. Counted per tile and summed at the end (no atomics
-/// per ray).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounts {
-    /// Primary rays from the camera.
-    pub camera: u64,
-    /// Shadow (occlusion) rays.
-    pub shadow: u64,
-    /// Reflected and refracted rays.
-    pub secondary: u64,
-}
-
-impl RayCounts {
-    /// All rays.
-    pub fn total(&self) -> u64 {
-        self.camera + self.shadow + self.secondary
-    }
-}
-
-impl AddAssign for RayCounts {
-    fn add_assign(&mut self, o: RayCounts) {
-        self.camera += o.camera;
-        self.shadow += o.shadow;
-        self.secondary += o.secondary;
-    }
-}
-
-/// Per-sample state threaded through the recursion.
-pub struct SampleContext<'c> {
-    /// The sample's own numbers.
-    pub rng: Sampler,
-    /// With spread sampling, which share `slot ∈ [0, spp)` of the area
-    /// lights' strata this sample takes. Ignored when splitting.
-    pub slot: u32,
-    /// Key of the order in which the area lights' strata are visited
-    /// ([`stratum_order`]), per pixel; each light mixes in its index.
-    pub light_seed: u32,
-    /// With spread sampling, the stratum in `[0, spp)` of the sample's first
-    /// Fresnel choice (reflect or refract at a dielectric); taken by that
-    /// choice, later ones draw from `rng`. `None`: every choice draws.
-    pub fresnel_stratum: Option<u32>,
-    /// Ray counters of the current tile.
-    pub counts: &'c mut RayCounts,
-    /// Recent caustic site searches of the current tile: speeds up the
-    /// caustic lookups of nearby samples without changing their results.
-    pub sites: &'c mut SiteCache,
-}
 
 /// The Whitted integrator over one scene and accelerator.
 pub struct Whitted<'a> {
@@ -219,7 +171,7 @@ impl<'a> Whitted<'a> {
 
     /// Radiance arriving along `ray` (toward its origin) after `depth`
     /// specular bounces.
-    pub fn radiance(&self, ray: &Ray, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+    fn trace(&self, ray: &Ray, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let hit = self.accel.intersect(ray, f32::INFINITY);
         // A visible area light nearer than the surface: its emitting side
         // returns its radiance; seen from behind it is not there.
@@ -252,7 +204,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// Radiance leaving the surface hit by `ray` toward its origin.
-    fn shade(&self, ray: &Ray, hit: &crate::accel::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
+    fn shade(&self, ray: &Ray, hit: &crate::geometry::Hit, depth: u32, ctx: &mut SampleContext) -> Vec3A {
         let si = self.scene.surface_interaction(ray, hit);
         let m = &*self.scene.materials[si.material as usize].at(si.uv);
         // An emitting surface seen from a side it emits from.
@@ -325,7 +277,7 @@ impl<'a> Whitted<'a> {
         let dir = dir.normalize();
         let origin = offset_ray_origin(si.p, si.p_error, si.ng, dir);
         ctx.counts.secondary += 1;
-        self.radiance(&Ray::new(origin, dir), depth + 1, ctx)
+        self.trace(&Ray::new(origin, dir), depth + 1, ctx)
     }
 
     /// Local shading: ambient and direct light from every light, with
@@ -606,6 +558,14 @@ impl<'a> Whitted<'a> {
             let lt = self.trace_secondary(si, refracted_dir, depth, ctx);
             highlight + lr * r + d.tint * lt * (1.0 - r)
         }
+    }
+}
+
+impl Integrator for Whitted<'_> {
+    /// The camera ray's radiance, its hit found again (the Whitted
+    /// integrator shades from its own query).
+    fn radiance(&self, ray: &Ray, _first_hit: Option<Option<crate::geometry::Hit>>, ctx: &mut SampleContext) -> Vec3A {
+        self.trace(ray, 0, ctx)
     }
 }
 

@@ -719,7 +719,15 @@ impl RenderJob {
         if self.retrace_aovs && plan.aovs && !samples_shard {
             integrator::render::retrace_aovs(&self.scene, accel, &plan, &mut start);
         }
-        let mut output = integrator::render_with_traced(&self.scene, accel, &plan, self.photons, start, &control);
+        let photons = match self.photons {
+            Some(traced) => integrator::PhotonInput::Traced(traced),
+            None => integrator::PhotonInput::Trace,
+        };
+        let setup = integrator::RenderSetup::default()
+            .continuing(start)
+            .photons(photons)
+            .control(control);
+        let mut output = integrator::render(&self.scene, accel, &plan, setup);
         if let Some(set) = &shard {
             output.complete = set.is_complete(&output.accumulation, st.spp);
             output.timed_out &= !output.complete;

@@ -1,6 +1,6 @@
 //! The viewer's render thread: takes the latest [`ViewRequest`], renders it
 //! in passes with the same render core as `caustic render`
-//! ([`integrator::render_progressive`]), and sends each finished pass back
+//! ([`integrator::render()`] with its cached map), and sends each finished pass back
 //! as a [`Frame`]. Rendering never runs on the UI thread.
 //!
 //! What a request does not need is skipped: the accelerator is rebuilt only
@@ -436,7 +436,11 @@ fn run_pass(
         deadline: None,
         progress: &|_, _| {},
     };
-    let out = integrator::render_progressive(scene, accel, plan, map, start, &control);
+    let setup = integrator::RenderSetup::default()
+        .continuing(start)
+        .photons(integrator::PhotonInput::Map(map))
+        .control(control);
+    let out = integrator::render(scene, accel, plan, setup);
     if request.cancel.load(Ordering::Relaxed) {
         return None;
     }

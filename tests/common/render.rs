@@ -4,7 +4,7 @@
 
 use caustic::accel::{self, AccelKind, AccelOptions};
 use caustic::film::Film;
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::scene::LoadedScene;
 
 /// `scene` rendered with accelerator `kind` at its own settings.
@@ -14,7 +14,7 @@ pub fn film(scene: &LoadedScene, kind: AccelKind) -> Film {
         &scene.scene,
         accel.as_ref(),
         &RenderPlan::new(&scene.scene, &scene.settings),
-        &|_, _| {},
+        RenderSetup::default(),
     )
     .film
 }

@@ -5,7 +5,7 @@
 //! as the objects and the camera see them.
 
 use caustic::accel::{self, AccelKind, AccelOptions};
-use caustic::integrator::{render, RenderPlan};
+use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::scene::{HomogeneousMedium, LoadedScene, Material, Scene, Shape};
 use caustic::texture::Texture;
 use std::sync::Arc;
@@ -127,6 +127,6 @@ pub fn render_small(loaded: &LoadedScene, width: u32, height: u32, spp: u32) -> 
     settings.photons.count = settings.photons.count.min(20_000);
     let accel = accel::build(scene, AccelKind::KdTree, &AccelOptions::default()).unwrap();
     let plan = RenderPlan::new(scene, &settings);
-    let out = render(scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(scene, accel.as_ref(), &plan, RenderSetup::default());
     out.film.pixels.iter().map(|p| p.to_array()).collect()
 }

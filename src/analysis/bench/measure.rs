@@ -242,7 +242,7 @@ fn time_set(accel: &dyn Accel, set: &RaySet, repeats: u32) -> RayBench {
 
 /// One full render of `scene` as `plan` says.
 fn time_render(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan) -> RenderBench {
-    let out = integrator::render::render(scene, accel, plan, &|_, _| {});
+    let out = integrator::render(scene, accel, plan, integrator::RenderSetup::default());
     let s = &out.stats;
     let (photon_seconds, photon_rays) = s.photons.as_ref().map_or((0.0, 0), |p| {
         ((p.trace_time + p.build_time + p.precompute_time).as_secs_f64(), p.rays)

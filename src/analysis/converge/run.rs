@@ -243,7 +243,7 @@ impl Renderer<'_> {
     fn warm_up(&mut self, accel: &dyn Accel, curve: &CurveSpec) {
         let photons = self.default_photons(1).min(WARM_UP_PHOTONS);
         let plan = self.configure(curve, 1, photons, None);
-        let out = render::render(&self.scene, accel, &plan, &|_, _| {});
+        let out = render::render(&self.scene, accel, &plan, render::RenderSetup::default());
         if curve.denoise {
             // The first filter loads OIDN's device module.
             let _ = denoised(&out, self.settings.denoise_quality);
@@ -260,7 +260,7 @@ impl Renderer<'_> {
     ) -> Result<Run, ConvergeError> {
         let plan = self.configure(curve, spp, photons, threshold);
         let start = Instant::now();
-        let out = render::render(&self.scene, accel, &plan, &|_, _| {});
+        let out = render::render(&self.scene, accel, &plan, render::RenderSetup::default());
         let film = match curve.denoise {
             true => denoised(&out, self.settings.denoise_quality)?,
             false => out.film.clone(),
@@ -282,7 +282,7 @@ impl Renderer<'_> {
                 break;
             }
             let again = Instant::now();
-            let repeat = render::render(&self.scene, accel, &plan, &|_, _| {});
+            let repeat = render::render(&self.scene, accel, &plan, render::RenderSetup::default());
             if curve.denoise {
                 denoised(&repeat, self.settings.denoise_quality)?;
             }

@@ -37,8 +37,7 @@ use crate::bsdf::DielectricInterface;
 use crate::geometry::generate::icosphere;
 use crate::integrator::photon::SiteCache;
 use crate::integrator::render::render;
-use crate::integrator::whitted::{SampleContext, Whitted};
-use crate::integrator::{RayCounts, RenderPlan};
+use crate::integrator::{Integrator, RayCounts, RenderPlan, RenderSetup, SampleContext, Whitted};
 use crate::math::{offset_ray_origin, Ray, Rng, Transform, Vec3, Vec3A};
 use crate::scene::{Dielectric, Light, LoadedScene, Material, Object, RenderSettings, Scene, Shape, Sphere};
 use std::path::Path;
@@ -163,7 +162,7 @@ fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64)
         counts: &mut counts,
         sites: &mut SiteCache::default(),
     };
-    let l = integrator.radiance(ray, 0, &mut ctx);
+    let l = integrator.radiance(ray, None, &mut ctx);
     (counts.secondary, l.is_finite())
 }
 
@@ -347,7 +346,7 @@ pub fn render_injected(name: &str, width: u32) -> Result<(u64, u64, u64), String
 fn render_counts(scene: &Scene, settings: &RenderSettings) -> Result<(u64, u64, u64), String> {
     let accel = accel::build(scene, AccelKind::default_kind(), &AccelOptions::default()).map_err(|e| e.to_string())?;
     let plan = RenderPlan::new(scene, settings);
-    let out = render(scene, accel.as_ref(), &plan, &|_, _| {});
+    let out = render(scene, accel.as_ref(), &plan, RenderSetup::default());
     let bad = out.film.pixels.iter().filter(|p| !p.is_finite()).count() as u64;
     Ok((bad, out.stats.dropped_samples, out.stats.samples))
 }

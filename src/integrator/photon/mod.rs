@@ -19,6 +19,8 @@
 //! - [`mod@file`]: photon files (`caustic photons`, `--photon-map`);
 //! - [`progressive`]: progressive photon mapping's schedule (Knaus &
 //!   Zwicker 2011): one independent map per sample index and its radius.
+//! - [`source`]: where a render's caustics come from (none, one map, a
+//!   map per sample index).
 //!
 //! The pass is parallel (rayon) and deterministic: photon `i` draws from
 //! `Rng::new(seed, Domain::Photon, i, 0)` and the photons are concatenated
@@ -33,12 +35,14 @@ pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
 pub mod progressive;
+pub mod source;
 
 pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, TraceSettings, PHOTON_PATH_DEPTH};
 pub use file::{read_photons, write_photons, PhotonFileError};
 pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR, VOLUME_RADIUS_SCALE};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
 pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
+pub use source::CausticsSource;
 
 use crate::accel::Accel;
 use crate::scene::Scene;
