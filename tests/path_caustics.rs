@@ -414,28 +414,16 @@ fn photon_files_are_refused_for_the_path_integrators_maps() {
 /// map and water included: the maps are re-traced identically.
 #[test]
 fn map_caustics_resume_bit_for_bit() {
-    use caustic::film::Accumulation;
     use caustic::integrator::{RenderControl, RenderSetup};
     for mut s in [scene(GLASS), scene(&water(0.05, 0.15, false, "caustics = \"map\""))] {
         s.settings.spp = 12;
         s.settings.photons.count = 40_000;
         let accel = accel::build(&s.scene, AccelKind::default_kind(), &AccelOptions::default()).unwrap();
         let plan = RenderPlan::new(&s.scene, &s.settings);
-        let start = || Accumulation::new(plan.width, plan.height);
-        let full = render(
-            &s.scene,
-            accel.as_ref(),
-            &plan,
-            RenderSetup::default().continuing(start()),
-        );
+        let full = render(&s.scene, accel.as_ref(), &plan, RenderSetup::default());
         let mut first = RenderControl::to_completion(&|_, _| {});
         first.sample_limit = Some(4);
-        let part = render(
-            &s.scene,
-            accel.as_ref(),
-            &plan,
-            RenderSetup::default().continuing(start()).control(first),
-        );
+        let part = render(&s.scene, accel.as_ref(), &plan, RenderSetup::default().control(first));
         assert!(part.accumulation.samples_taken() < full.accumulation.samples_taken());
         let rest = render(
             &s.scene,

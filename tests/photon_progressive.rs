@@ -266,7 +266,6 @@ fn same_image_on_one_and_three_threads() {
 fn interrupt_and_resume(scene: &LoadedScene, stop_at: u64) -> (Accumulation, Accumulation) {
     let accel = build(&scene.scene, AccelKind::KdTree);
     let plan = RenderPlan::new(&scene.scene, &scene.settings);
-    let (w, h) = (plan.width, plan.height);
     let cancel = AtomicBool::new(false);
     let progress = |done: u64, _total: u64| {
         if done >= stop_at {
@@ -281,9 +280,7 @@ fn interrupt_and_resume(scene: &LoadedScene, stop_at: u64) -> (Accumulation, Acc
         &scene.scene,
         accel.as_ref(),
         &plan,
-        RenderSetup::default()
-            .continuing(Accumulation::new(w, h))
-            .control(control),
+        RenderSetup::default().control(control),
     );
     assert!(!first.complete, "stopped at {stop_at}");
     let partial = first.accumulation.clone();

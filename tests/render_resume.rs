@@ -72,9 +72,7 @@ fn cancelled_mid_pass_then_resumed_equals_uninterrupted() {
             &scene.scene,
             accel.as_ref(),
             &plan,
-            RenderSetup::default()
-                .continuing(Accumulation::new(40, 30))
-                .control(control),
+            RenderSetup::default().control(control),
         );
         assert!(!first.complete, "stopped at {stop_at}");
         let taken = first.accumulation.samples_taken();
@@ -119,9 +117,7 @@ fn sample_limit_gives_a_full_frame_and_resumes_through_a_checkpoint_file() {
         &scene.scene,
         accel.as_ref(),
         &plan,
-        RenderSetup::default()
-            .continuing(Accumulation::new(40, 30))
-            .control(control),
+        RenderSetup::default().control(control),
     );
     // The partial image covers the whole frame at 3 spp: no black tiles.
     assert_eq!(preview.accumulation.taken_range(), (3, 3));
@@ -177,9 +173,7 @@ fn every_periodic_snapshot_resumes_to_the_same_image() {
             &scene.scene,
             accel.as_ref(),
             &plan,
-            RenderSetup::default()
-                .continuing(Accumulation::new(40, 30))
-                .control(control),
+            RenderSetup::default().control(control),
         )
     });
     let reference = render(&scene.scene, accel.as_ref(), &plan, RenderSetup::default());
@@ -217,9 +211,7 @@ fn a_render_cancelled_before_it_starts_takes_no_sample() {
         &scene.scene,
         accel.as_ref(),
         &plan,
-        RenderSetup::default()
-            .continuing(Accumulation::new(40, 30))
-            .control(control),
+        RenderSetup::default().control(control),
     );
     assert_eq!(out.accumulation.samples_taken(), 0);
     assert!(out.stats.photons.is_none(), "the photon pass is skipped too");
