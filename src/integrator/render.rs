@@ -812,10 +812,18 @@ impl<'a> CameraSamples<'a> {
 }
 
 impl PixelSamples<'_> {
-    /// Sample `k`'s camera ray and its sampler, the ray's two dimensions drawn.
-    fn ray(&self, k: u32) -> (crate::math::Ray, Sampler) {
+    /// A sampler of this pixel, which [`ray`](Self::ray) re-keys to each
+    /// sample (what depends on the pixel alone is derived once).
+    fn sampler(&self) -> Sampler {
         let r = self.render;
-        let mut rng = Sampler::new(r.sampler, r.seed, self.pixel, k as u64);
+        Sampler::new(r.sampler, r.seed, self.pixel, 0)
+    }
+
+    /// Sample `k`'s camera ray, `rng` (this pixel's sampler) re-keyed to
+    /// sample `k` and the ray's two dimensions drawn from it.
+    fn ray(&self, k: u32, rng: &mut Sampler) -> crate::math::Ray {
+        let r = self.render;
+        rng.restart(k as u64);
         let sub = match r.sampler {
             // Stratified jittered sub-pixel position (gx × gy = spp), the
             // strata visited in a per-pixel random order: a pixel stopped
@@ -828,12 +836,11 @@ impl PixelSamples<'_> {
         let sub = r.camera.filter.sample(sub);
         let (x, y) = (self.x as f32 + sub.x, self.y as f32 + sub.y);
         // A thin lens draws its two dimensions next; a pinhole none.
-        let ray = if r.camera.has_lens() {
+        if r.camera.has_lens() {
             r.camera.ray_through_lens(x, y, r.width, r.height, rng.vec2())
         } else {
             r.camera.ray(x, y, r.width, r.height)
-        };
-        (ray, rng)
+        }
     }
 }
 
@@ -851,8 +858,9 @@ pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &m
         .map(|i| {
             let samples = camera_samples.pixel((i % width) as u32, (i / width) as u32);
             let (mut albedo, mut normal) = (Vec3A::ZERO, Vec3A::ZERO);
+            let mut rng = samples.sampler();
             for k in 0..acc.taken[i].min(AOV_SAMPLES) {
-                let (a, n) = aovs.trace(&samples.ray(k).0);
+                let (a, n) = aovs.trace(&samples.ray(k, &mut rng));
                 albedo += a;
                 normal += n;
             }
@@ -906,8 +914,9 @@ fn render_tile_pass(
                 true => (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i])),
                 false => (Vec3A::ZERO, Vec3A::ZERO),
             };
+            let mut rng = samples.sampler();
             for k in first..target {
-                let (ray, mut rng) = samples.ray(k);
+                let ray = samples.ray(k, &mut rng);
                 out.rays.camera += 1;
                 // The camera ray's hit, when the AOVs found it first.
                 let mut first = None;
@@ -921,7 +930,7 @@ fn render_tile_pass(
                 let l = match integrator {
                     Tracer::Whitted(whitted) => {
                         let mut ctx = SampleContext {
-                            rng,
+                            rng: rng.clone(),
                             slot: strata.slot(k),
                             light_seed: strata.light_seed(),
                             fresnel_stratum: strata.fresnel_stratum(k),
