@@ -766,10 +766,11 @@ enum Tracer<'a> {
 /// pixel, computed once per pass.
 struct CameraSamples<'a> {
     camera: &'a crate::scene::Camera,
+    /// The camera's rays of this image size.
+    image: crate::scene::ImageRays<'a>,
     sampler: SamplerKind,
     seed: u64,
     width: u32,
-    height: u32,
     spp: u32,
     grid: (u32, u32),
 }
@@ -790,10 +791,10 @@ impl<'a> CameraSamples<'a> {
         let spp = plan.spp.max(1);
         Self {
             camera: &scene.camera,
+            image: scene.camera.image(plan.width, plan.height),
             sampler: plan.sampler,
             seed: plan.seed,
             width: plan.width,
-            height: plan.height,
             spp,
             grid: grid_for(spp),
         }
@@ -837,9 +838,9 @@ impl PixelSamples<'_> {
         let (x, y) = (self.x as f32 + sub.x, self.y as f32 + sub.y);
         // A thin lens draws its two dimensions next; a pinhole none.
         if r.camera.has_lens() {
-            r.camera.ray_through_lens(x, y, r.width, r.height, rng.vec2())
+            r.image.ray_through_lens(x, y, rng.vec2())
         } else {
-            r.camera.ray(x, y, r.width, r.height)
+            r.image.ray(x, y)
         }
     }
 }
