@@ -39,6 +39,7 @@
 //! the vertex next to its delta chain, or as a path. Next-event estimation
 //! and light reached with no delta bounce stay path traced.
 
+use super::aov::FirstHit;
 use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
 use super::photon::{GatherParams, Kernel, PhotonMap, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
@@ -46,7 +47,6 @@ use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::whitted::{RayCounts, SHADOW_EPSILON};
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
-use crate::geometry::Hit;
 use crate::math::{offset_ray_origin, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
 
@@ -165,13 +165,13 @@ impl<'a> PathTracer<'a> {
         self.radiance_from(ray, None, rng, counts)
     }
 
-    /// [`radiance`](Self::radiance) with the nearest hit of `ray` already
-    /// found (`Some(hit)`, `hit` itself `None` for a miss), as the AOV
-    /// tracer finds it for the same camera ray.
+    /// [`radiance`](Self::radiance) with the nearest hit of `ray` (and
+    /// perhaps its surface interaction) already found, as the AOV tracer
+    /// finds it for the same camera ray.
     pub fn radiance_from(
         &self,
         ray: &Ray,
-        mut first: Option<Option<Hit>>,
+        mut first: Option<&FirstHit>,
         rng: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Vec3A {
@@ -190,9 +190,11 @@ impl<'a> PathTracer<'a> {
         // Delta bounces since a map vertex sampled a non-delta direction.
         let mut since_map: Option<u32> = None;
         loop {
-            let hit = match first.take() {
-                Some(hit) => hit,
-                None => self.accel.intersect(&ray, f32::INFINITY),
+            // The camera ray's hit and its interaction, when known: for
+            // this ray only.
+            let (hit, mut known_interaction) = match first.take() {
+                Some(f) => (f.hit, f.interaction.as_ref()),
+                None => (self.accel.intersect(&ray, f32::INFINITY), None),
             };
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
             // Emitters the camera sees directly, when the scene hides them.
@@ -293,7 +295,10 @@ impl<'a> PathTracer<'a> {
                 }
                 break;
             };
-            let si = self.scene.surface_interaction(&ray, &hit);
+            let si = match known_interaction.take() {
+                Some(si) => *si,
+                None => self.scene.surface_interaction(&ray, &hit),
+            };
             let material = &*self.scene.materials[si.material as usize].at(si.uv);
             if let Some(light) = self.lights.object_emitter(si.object) {
                 // An emitting surface, seen from a side it emits from.

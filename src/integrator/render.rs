@@ -940,7 +940,7 @@ fn render_tile_pass(
                         };
                         whitted.radiance(&ray, 0, &mut ctx)
                     }
-                    Tracer::Path(path) => path.radiance_from(&ray, first, &mut rng, &mut out.rays),
+                    Tracer::Path(path) => path.radiance_from(&ray, first.as_ref(), &mut rng, &mut out.rays),
                     Tracer::Volume(path) => path.radiance(&ray, &mut rng, &mut out.rays),
                 };
                 out.samples += 1;
