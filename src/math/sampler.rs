@@ -88,7 +88,7 @@ fn set_scramble(seed: u32, set: u32) -> [u32; 4] {
 /// set's hashed key `scramble` ([`set_scramble`]).
 #[inline]
 fn sobol_4d_hashed(index_rev: u32, set: u32, scramble: [u32; 4]) -> [f32; 4] {
-    use sobol_burley::parts::{owen_scramble_int4_rev, Int4};
+    use sobol_burley::parts::{owen_scramble_rev, Int4};
     let table = &NIBBLE_VECTORS[set as usize];
     let mut v = [0u32; 4];
     for (n, nibbles) in table.iter().enumerate() {
@@ -97,9 +97,12 @@ fn sobol_4d_hashed(index_rev: u32, set: u32, scramble: [u32; 4]) -> [f32; 4] {
             v[lane] ^= entry[lane];
         }
     }
-    owen_scramble_int4_rev(Int4::from(v), Int4::from(scramble))
-        .reverse_bits()
-        .to_f32_norm()
+    // The Owen scramble one lane at a time: the crate's four-lane form is
+    // the same arithmetic, but baseline x86-64 (SSE2) has no 32-bit lane
+    // multiply, and its emulation costs more than four scalar `imul`s
+    // (callgrind: 165 → 152 instructions per refill).
+    let scrambled: [u32; 4] = std::array::from_fn(|lane| owen_scramble_rev(v[lane], scramble[lane]));
+    Int4::from(scrambled).reverse_bits().to_f32_norm()
 }
 
 /// The scramble of the sample index under `seed`, as
