@@ -244,7 +244,7 @@ fn single_loop_film(scene: &LoadedScene, accel: &dyn Accel, plan: &RenderPlan, m
                     .camera
                     .ray(x as f32 + sub.x, y as f32 + sub.y, plan.width, plan.height);
                 let mut ctx = SampleContext {
-                    rng,
+                    rng: &mut rng,
                     slot: strata.slot(k),
                     light_seed: strata.light_seed(),
                     fresnel_stratum: strata.fresnel_stratum(k),

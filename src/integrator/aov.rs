@@ -18,11 +18,23 @@ use crate::bsdf::specular::{reflect, refract};
 pub use crate::film::accum::AOV_SAMPLES;
 use crate::geometry::Hit;
 use crate::math::{offset_ray_origin, Ray, Vec3A};
-use crate::scene::{Light, Material, Quad, Scene};
+use crate::scene::{Light, Material, Quad, Scene, SurfaceInteraction};
 
 /// Specular surfaces followed before giving up (a ray trapped between
 /// mirrors or inside glass then reads as the background).
 pub const MAX_SPECULAR_CHAIN: u32 = 8;
+
+/// A camera ray's nearest hit as the AOV tracer found it, for the
+/// integrator to start from (`Scene::surface_interaction` is a function of
+/// the ray and the hit alone: the same interaction either way).
+#[derive(Clone, Copy, Debug)]
+pub struct FirstHit {
+    /// The nearest hit (`None`: the ray escapes).
+    pub hit: Option<Hit>,
+    /// The hit's surface interaction, when the tracer reached it (no
+    /// emitter in front of it).
+    pub interaction: Option<SurfaceInteraction>,
+}
 
 /// Traces the AOVs of camera rays.
 pub struct AovTracer<'a> {
@@ -122,14 +134,24 @@ impl<'a> AovTracer<'a> {
 
     /// [`trace`](Self::trace), and the camera ray's own nearest hit, which
     /// the integrator then starts from instead of tracing the ray again
-    /// (the same query of the same ray: the same hit).
-    pub fn trace_keeping_hit(&self, ray: &Ray) -> (Vec3A, Vec3A, Option<Hit>) {
-        let first = self.accel.intersect(ray, f32::INFINITY);
-        let (albedo, normal) = self.trace_from(ray, first);
-        (albedo, normal, first)
+    /// (the same query of the same ray: the same hit), with the hit's
+    /// surface interaction when the tracer computed it.
+    pub fn trace_keeping_hit(&self, ray: &Ray) -> (Vec3A, Vec3A, FirstHit) {
+        let hit = self.accel.intersect(ray, f32::INFINITY);
+        let mut interaction = None;
+        let (albedo, normal) = self.trace_from(ray, hit, &mut interaction);
+        (albedo, normal, FirstHit { hit, interaction })
     }
 
-    fn trace_from(&self, ray: &Ray, first: Option<Hit>) -> (Vec3A, Vec3A) {
+    /// The albedo and normal along `ray`, whose nearest hit is `first`;
+    /// `first_interaction` receives that hit's surface interaction when
+    /// the walk computes it.
+    fn trace_from(
+        &self,
+        ray: &Ray,
+        first: Option<Hit>,
+        first_interaction: &mut Option<SurfaceInteraction>,
+    ) -> (Vec3A, Vec3A) {
         let mut ray = *ray;
         let mut weight = Vec3A::ONE;
         for bounce in 0..=MAX_SPECULAR_CHAIN {
@@ -154,6 +176,9 @@ impl<'a> AovTracer<'a> {
                 return (Vec3A::ZERO, Vec3A::ZERO);
             };
             let si = self.scene.surface_interaction(&ray, &hit);
+            if bounce == 0 {
+                *first_interaction = Some(si);
+            }
             let entering = si.ng.dot(ray.dir) < 0.0;
             let (ng, ns) = if entering { (si.ng, si.ns) } else { (-si.ng, -si.ns) };
             let mirror = |d: Vec3A| {

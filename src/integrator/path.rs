@@ -39,6 +39,7 @@
 //! the vertex next to its delta chain, or as a path. Next-event estimation
 //! and light reached with no delta bounce stay path traced.
 
+use super::aov::FirstHit;
 use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
 use super::photon::{GatherParams, Kernel, PhotonMap, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
@@ -47,7 +48,6 @@ use super::sample::{Integrator, RayCounts, SampleContext};
 use super::whitted::SHADOW_EPSILON;
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, FresnelModel, Transport};
-use crate::geometry::Hit;
 use crate::math::{offset_ray_origin, Ray, Sampler, Vec3A};
 use crate::scene::Scene;
 
@@ -161,10 +161,10 @@ impl<'a> PathTracer<'a> {
     }
 
     /// Radiance arriving along `ray` toward its origin, from the path's own
-    /// random stream, starting from the ray's nearest hit when it is
-    /// already found (`Some(hit)`, `hit` itself `None` for a miss), as the
-    /// AOV tracer finds it for the same camera ray.
-    fn trace(&self, ray: &Ray, mut first: Option<Option<Hit>>, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
+    /// random stream, starting from the camera ray's nearest hit (and
+    /// perhaps its surface interaction) when the AOV tracer already found
+    /// it for the same ray.
+    fn trace(&self, ray: &Ray, mut first: Option<&FirstHit>, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;
@@ -180,9 +180,11 @@ impl<'a> PathTracer<'a> {
         // Delta bounces since a map vertex sampled a non-delta direction.
         let mut since_map: Option<u32> = None;
         loop {
-            let hit = match first.take() {
-                Some(hit) => hit,
-                None => self.accel.intersect(&ray, f32::INFINITY),
+            // The camera ray's hit and its interaction, when known: for
+            // this ray only.
+            let (hit, mut known_interaction) = match first.take() {
+                Some(f) => (f.hit, f.interaction.as_ref()),
+                None => (self.accel.intersect(&ray, f32::INFINITY), None),
             };
             let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
             // Emitters the camera sees directly, when the scene hides them.
@@ -283,7 +285,10 @@ impl<'a> PathTracer<'a> {
                 }
                 break;
             };
-            let si = self.scene.surface_interaction(&ray, &hit);
+            let si = match known_interaction.take() {
+                Some(si) => *si,
+                None => self.scene.surface_interaction(&ray, &hit),
+            };
             let material = &*self.scene.materials[si.material as usize].at(si.uv);
             if let Some(light) = self.lights.object_emitter(si.object) {
                 // An emitting surface, seen from a side it emits from.
@@ -442,8 +447,8 @@ impl<'a> PathTracer<'a> {
 }
 
 impl Integrator for PathTracer<'_> {
-    fn radiance(&self, ray: &Ray, first_hit: Option<Option<Hit>>, ctx: &mut SampleContext) -> Vec3A {
-        self.trace(ray, first_hit, &mut ctx.rng, ctx.counts)
+    fn radiance(&self, ray: &Ray, first_hit: Option<&FirstHit>, ctx: &mut SampleContext) -> Vec3A {
+        self.trace(ray, first_hit, ctx.rng, ctx.counts)
     }
 }
 

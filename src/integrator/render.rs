@@ -758,10 +758,11 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
 /// pixel, computed once per pass.
 struct CameraSamples<'a> {
     camera: &'a crate::scene::Camera,
+    /// The camera's rays of this image size.
+    image: crate::scene::ImageRays<'a>,
     sampler: SamplerKind,
     seed: u64,
     width: u32,
-    height: u32,
     spp: u32,
     grid: (u32, u32),
 }
@@ -782,10 +783,10 @@ impl<'a> CameraSamples<'a> {
         let spp = plan.spp.max(1);
         Self {
             camera: &scene.camera,
+            image: scene.camera.image(plan.width, plan.height),
             sampler: plan.sampler,
             seed: plan.seed,
             width: plan.width,
-            height: plan.height,
             spp,
             grid: grid_for(spp),
         }
@@ -804,10 +805,18 @@ impl<'a> CameraSamples<'a> {
 }
 
 impl PixelSamples<'_> {
-    /// Sample `k`'s camera ray and its sampler, the ray's two dimensions drawn.
-    fn ray(&self, k: u32) -> (crate::math::Ray, Sampler) {
+    /// A sampler of this pixel, which [`ray`](Self::ray) re-keys to each
+    /// sample (what depends on the pixel alone is derived once).
+    fn sampler(&self) -> Sampler {
         let r = self.render;
-        let mut rng = Sampler::new(r.sampler, r.seed, self.pixel, k as u64);
+        Sampler::new(r.sampler, r.seed, self.pixel, 0)
+    }
+
+    /// Sample `k`'s camera ray, `rng` (this pixel's sampler) re-keyed to
+    /// sample `k` and the ray's two dimensions drawn from it.
+    fn ray(&self, k: u32, rng: &mut Sampler) -> crate::math::Ray {
+        let r = self.render;
+        rng.restart(k as u64);
         let sub = match r.sampler {
             // Stratified jittered sub-pixel position (gx × gy = spp), the
             // strata visited in a per-pixel random order: a pixel stopped
@@ -820,12 +829,11 @@ impl PixelSamples<'_> {
         let sub = r.camera.filter.sample(sub);
         let (x, y) = (self.x as f32 + sub.x, self.y as f32 + sub.y);
         // A thin lens draws its two dimensions next; a pinhole none.
-        let ray = if r.camera.has_lens() {
-            r.camera.ray_through_lens(x, y, r.width, r.height, rng.vec2())
+        if r.camera.has_lens() {
+            r.image.ray_through_lens(x, y, rng.vec2())
         } else {
-            r.camera.ray(x, y, r.width, r.height)
-        };
-        (ray, rng)
+            r.image.ray(x, y)
+        }
     }
 }
 
@@ -843,8 +851,9 @@ pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &m
         .map(|i| {
             let samples = camera_samples.pixel((i % width) as u32, (i / width) as u32);
             let (mut albedo, mut normal) = (Vec3A::ZERO, Vec3A::ZERO);
+            let mut rng = samples.sampler();
             for k in 0..acc.taken[i].min(AOV_SAMPLES) {
-                let (a, n) = aovs.trace(&samples.ray(k).0);
+                let (a, n) = aovs.trace(&samples.ray(k, &mut rng));
                 albedo += a;
                 normal += n;
             }
@@ -898,8 +907,9 @@ fn render_tile_pass(
                 true => (Vec3A::from(acc.albedo[i]), Vec3A::from(acc.normal[i])),
                 false => (Vec3A::ZERO, Vec3A::ZERO),
             };
+            let mut rng = samples.sampler();
             for k in first..target {
-                let (ray, rng) = samples.ray(k);
+                let ray = samples.ray(k, &mut rng);
                 out.rays.camera += 1;
                 // The camera ray's hit, when the AOVs found it first.
                 let mut first = None;
@@ -911,14 +921,14 @@ fn render_tile_pass(
                     first = Some(hit);
                 }
                 let mut ctx = SampleContext {
-                    rng,
+                    rng: &mut rng,
                     slot: strata.slot(k),
                     light_seed: strata.light_seed(),
                     fresnel_stratum: strata.fresnel_stratum(k),
                     counts: &mut out.rays,
                     sites: &mut sites,
                 };
-                let l = integrator.radiance(&ray, first, &mut ctx);
+                let l = integrator.radiance(&ray, first.as_ref(), &mut ctx);
                 out.samples += 1;
                 if l.is_finite() {
                     let l = l.min(Vec3A::splat(SAMPLE_RADIANCE_LIMIT));

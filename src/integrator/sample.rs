@@ -4,19 +4,19 @@
 //! (`render`) owns pixels, passes and accumulation; an integrator only
 //! answers "how much light arrives along this camera ray".
 
+use super::aov::FirstHit;
 use super::photon::SiteCache;
-use crate::geometry::Hit;
 use crate::math::{Ray, Sampler, Vec3A};
 use std::ops::AddAssign;
 
 /// A light transport algorithm, as the render loop sees it.
 pub trait Integrator: Sync {
     /// Radiance arriving along the camera ray `ray` toward its origin.
-    /// `first_hit` is the ray's nearest hit when the caller already found
-    /// it (`Some(None)`: it misses everything), so the integrator need not
-    /// intersect the ray again; integrators that shade the camera ray
-    /// otherwise may ignore it.
-    fn radiance(&self, ray: &Ray, first_hit: Option<Option<Hit>>, ctx: &mut SampleContext) -> Vec3A;
+    /// `first_hit` is the ray's nearest hit (and perhaps its surface
+    /// interaction) when the caller already found it, so the integrator
+    /// need not intersect the ray again; integrators that shade the camera
+    /// ray otherwise may ignore it.
+    fn radiance(&self, ray: &Ray, first_hit: Option<&FirstHit>, ctx: &mut SampleContext) -> Vec3A;
 }
 
 /// Rays cast, by kind. Counted per tile and summed at the end (no atomics
@@ -49,8 +49,8 @@ impl AddAssign for RayCounts {
 /// One pixel sample's state: its random numbers, the strata the render
 /// loop assigned it, and the tile's counters and caches.
 pub struct SampleContext<'c> {
-    /// The sample's own numbers.
-    pub rng: Sampler,
+    /// The sample's own numbers (the pixel's sampler, keyed to the sample).
+    pub rng: &'c mut Sampler,
     /// With spread sampling, which share `slot ∈ [0, spp)` of the area
     /// lights' strata this sample takes. Ignored when splitting.
     pub slot: u32,

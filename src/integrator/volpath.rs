@@ -39,6 +39,7 @@
 //! Every random number comes from the pixel sample's own stream, in an
 //! order fixed by the path alone.
 
+use super::aov::FirstHit;
 use super::lights::LightSampler;
 use super::medium::{Flight, Homogeneous};
 use super::path::power_heuristic;
@@ -416,7 +417,7 @@ impl<'a> VolumePathTracer<'a> {
 impl Integrator for VolumePathTracer<'_> {
     /// The camera ray's radiance, its hit found again (the ray may start
     /// inside a medium, which the first query's hit does not tell).
-    fn radiance(&self, ray: &Ray, _first_hit: Option<Option<crate::geometry::Hit>>, ctx: &mut SampleContext) -> Vec3A {
-        self.trace(ray, &mut ctx.rng, ctx.counts)
+    fn radiance(&self, ray: &Ray, _first_hit: Option<&FirstHit>, ctx: &mut SampleContext) -> Vec3A {
+        self.trace(ray, ctx.rng, ctx.counts)
     }
 }

@@ -41,6 +41,7 @@
 //! - Fog: with a medium, every camera and secondary ray segment is blended
 //!   toward the fog colour by its length inside the medium (`fog.rs`).
 
+use super::aov::FirstHit;
 use super::fog;
 use super::photon::{GatherParams, PhotonMap};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
@@ -564,7 +565,7 @@ impl<'a> Whitted<'a> {
 impl Integrator for Whitted<'_> {
     /// The camera ray's radiance, its hit found again (the Whitted
     /// integrator shades from its own query).
-    fn radiance(&self, ray: &Ray, _first_hit: Option<Option<crate::geometry::Hit>>, ctx: &mut SampleContext) -> Vec3A {
+    fn radiance(&self, ray: &Ray, _first_hit: Option<&FirstHit>, ctx: &mut SampleContext) -> Vec3A {
         self.trace(ray, 0, ctx)
     }
 }

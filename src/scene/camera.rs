@@ -219,16 +219,7 @@ impl Camera {
     /// pixels (origin top-left, y down) of a `width × height` image.
     #[inline]
     pub fn ray(&self, x: f32, y: f32, width: u32, height: u32) -> Ray {
-        if let Projection::Orthographic { .. } = self.projection {
-            // Parallel projection (pbrt-v4 §5.1.4, Mitsuba's `orthographic`):
-            // the film point on the rectangle through the eye, looking down
-            // the view axis.
-            let (sx, sy) = self.film_offsets(x, y, width, height);
-            let origin = self.position + self.right * sx + self.up * sy;
-            return self.clipped(Ray::new(origin, self.forward));
-        }
-        let dir = self.direction(x, y, width, height);
-        self.clipped(Ray::new(self.position, dir))
+        self.image(width, height).ray(x, y)
     }
 
     /// Thin-lens ray (pbrt-v4 §5.2.3, Mitsuba's `thinlens`): from the lens
@@ -237,31 +228,20 @@ impl Camera {
     /// camera ignores `u_lens`.
     #[inline]
     pub fn ray_through_lens(&self, x: f32, y: f32, width: u32, height: u32, u_lens: Vec2) -> Ray {
-        if !self.has_lens() {
-            return self.ray(x, y, width, height);
+        self.image(width, height).ray_through_lens(x, y, u_lens)
+    }
+
+    /// The rays of a `width × height` image: [`ray`](Self::ray) and
+    /// [`ray_through_lens`](Self::ray_through_lens) with the image plane's
+    /// extents (a tangent of the field of view) computed once.
+    #[inline]
+    pub fn image(&self, width: u32, height: u32) -> ImageRays<'_> {
+        ImageRays {
+            camera: self,
+            width: width as f32,
+            height: height as f32,
+            half: self.half_extents(width as f32 / height as f32),
         }
-        let dir = self.direction(x, y, width, height);
-        let focus = self.position + dir * (self.focus_distance / dir.dot(self.forward));
-        let d = concentric_disk(u_lens) * self.aperture_radius;
-        let origin = self.position + self.right * d.x + self.up * d.y;
-        self.clipped(Ray::new(origin, (focus - origin).normalize()))
-    }
-
-    /// Offsets of film position `(x, y)` along `right` and `up` on the
-    /// image plane (see [`half_extents`](Self::half_extents)).
-    #[inline]
-    fn film_offsets(&self, x: f32, y: f32, width: u32, height: u32) -> (f32, f32) {
-        let (hx, hy) = self.half_extents(width as f32 / height as f32);
-        (
-            (2.0 * x / width as f32 - 1.0) * hx,
-            (1.0 - 2.0 * y / height as f32) * hy,
-        )
-    }
-
-    #[inline]
-    fn direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3A {
-        let (sx, sy) = self.film_offsets(x, y, width, height);
-        (self.forward + self.right * sx + self.up * sy).normalize()
     }
 
     /// `ray` started at the near plane.
@@ -273,6 +253,62 @@ impl Camera {
         } else {
             ray
         }
+    }
+}
+
+/// The camera rays of one image size ([`Camera::image`]).
+#[derive(Clone, Copy, Debug)]
+pub struct ImageRays<'a> {
+    camera: &'a Camera,
+    width: f32,
+    height: f32,
+    /// [`Camera::half_extents`] of the image's aspect ratio.
+    half: (f32, f32),
+}
+
+impl ImageRays<'_> {
+    /// [`Camera::ray`] of this image.
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let c = self.camera;
+        if let Projection::Orthographic { .. } = c.projection {
+            // Parallel projection (pbrt-v4 §5.1.4, Mitsuba's `orthographic`):
+            // the film point on the rectangle through the eye, looking down
+            // the view axis.
+            let (sx, sy) = self.film_offsets(x, y);
+            let origin = c.position + c.right * sx + c.up * sy;
+            return c.clipped(Ray::new(origin, c.forward));
+        }
+        c.clipped(Ray::new(c.position, self.direction(x, y)))
+    }
+
+    /// [`Camera::ray_through_lens`] of this image.
+    #[inline]
+    pub fn ray_through_lens(&self, x: f32, y: f32, u_lens: Vec2) -> Ray {
+        let c = self.camera;
+        if !c.has_lens() {
+            return self.ray(x, y);
+        }
+        let dir = self.direction(x, y);
+        let focus = c.position + dir * (c.focus_distance / dir.dot(c.forward));
+        let d = concentric_disk(u_lens) * c.aperture_radius;
+        let origin = c.position + c.right * d.x + c.up * d.y;
+        c.clipped(Ray::new(origin, (focus - origin).normalize()))
+    }
+
+    /// Offsets of film position `(x, y)` along `right` and `up` on the
+    /// image plane (see [`Camera::half_extents`]).
+    #[inline]
+    fn film_offsets(&self, x: f32, y: f32) -> (f32, f32) {
+        let (hx, hy) = self.half;
+        ((2.0 * x / self.width - 1.0) * hx, (1.0 - 2.0 * y / self.height) * hy)
+    }
+
+    #[inline]
+    fn direction(&self, x: f32, y: f32) -> Vec3A {
+        let (sx, sy) = self.film_offsets(x, y);
+        let c = self.camera;
+        (c.forward + c.right * sx + c.up * sy).normalize()
     }
 }
 

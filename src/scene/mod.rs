@@ -28,7 +28,7 @@ use std::sync::Arc;
 pub use crate::geometry::{Cylinder, Disk, Mesh, Quad, Sphere};
 pub use crate::geometry::{WaterSurface, Wave};
 pub use builder::{Origin, SceneBuilder};
-pub use camera::{Camera, FovAxis, Projection};
+pub use camera::{Camera, FovAxis, ImageRays, Projection};
 pub use cutout::Cutouts;
 pub use light::{AreaLight, Light};
 pub use load::{load_toml_scene, parse_scene, SceneError};

@@ -155,7 +155,7 @@ fn whitted_depth(scene: &Scene, accel: &dyn Accel, ray: &Ray, seed: u64, i: u64)
     let integrator = Whitted::new(scene, accel, &plan);
     let mut counts = RayCounts::default();
     let mut ctx = SampleContext {
-        rng: crate::math::Sampler::independent(trial_rng(seed, CASE, 1 << 40 | i)),
+        rng: &mut crate::math::Sampler::independent(trial_rng(seed, CASE, 1 << 40 | i)),
         slot: 0,
         light_seed: 0,
         fresnel_stratum: None,
