@@ -167,9 +167,18 @@ pub struct Sampler {
 impl Sampler {
     /// Sample `sample` of pixel `pixel` under `seed`.
     pub fn new(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Self {
-        let mut sampler = Self {
+        // The stream is never drawn from with Sobol, which draws every number.
+        let mut sampler = Self::unkeyed(kind, seed, pixel, Rng::from_state(0));
+        sampler.restart(sample);
+        sampler
+    }
+
+    /// A sampler of `pixel` under `render_seed` that no sample has keyed
+    /// yet, drawing independent numbers from `rng`.
+    fn unkeyed(kind: SamplerKind, render_seed: u64, pixel: u64, rng: Rng) -> Self {
+        Self {
             kind,
-            render_seed: seed,
+            render_seed,
             pixel,
             block: u64::MAX,
             seed: 0,
@@ -180,11 +189,8 @@ impl Sampler {
             batch: [0.0; 4],
             kept_sets: 0,
             set_scrambles: [[0; 4]; KEPT_SETS],
-            // Never drawn from with Sobol, which draws every number.
-            rng: Rng::from_state(0),
-        };
-        sampler.restart(sample);
-        sampler
+            rng,
+        }
     }
 
     /// Re-keys this sampler to sample `sample` of its pixel: the same
@@ -211,21 +217,7 @@ impl Sampler {
 
     /// An independent sampler drawing from `rng`.
     pub fn independent(rng: Rng) -> Self {
-        Self {
-            kind: SamplerKind::Independent,
-            render_seed: 0,
-            pixel: 0,
-            block: u64::MAX,
-            seed: 0,
-            index_scramble: 0,
-            index_rev: 0,
-            index: 0,
-            dimension: 0,
-            batch: [0.0; 4],
-            kept_sets: 0,
-            set_scrambles: [[0; 4]; KEPT_SETS],
-            rng,
-        }
+        Self::unkeyed(SamplerKind::Independent, 0, 0, rng)
     }
 
     /// Which numbers this sampler draws.
