@@ -300,11 +300,9 @@ pub fn photon_map_from(traced: TracedPhotons, plan: &RenderPlan) -> Option<(Phot
 }
 
 /// Where the photon map of a render whose plan runs a photon pass comes from.
-#[derive(Default)]
 pub enum PhotonInput<'a> {
     /// The render traces it before the image (progressive photon mapping
     /// traces one per sample index during the passes instead).
-    #[default]
     Trace,
     /// Built from photons traced beforehand (a photon file: the same map,
     /// so the same image). See [`photon_map_from`].
@@ -422,6 +420,7 @@ pub fn render(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, setup: Render
     let caustics = CausticsSource::new(progressive_schedule(plan), given.or(traced_map.as_deref()));
     let integrator = tracer(scene, accel, plan, caustics.fixed_map().map(|m| (m, None)));
     let aovs = AovTracer::new(scene, accel);
+    let camera_samples = CameraSamples::new(scene, plan);
     let stop = Stop {
         cancel: control.cancel,
         deadline: control.deadline,
@@ -479,7 +478,7 @@ pub fn render(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, setup: Render
                 .map(|state| {
                     let work = {
                         let mut state = state.lock().unwrap_or_else(PoisonError::into_inner);
-                        render_tile_pass(scene, integrator, &aovs, plan, &mut state, target, &stop)
+                        render_tile_pass(&camera_samples, integrator, &aovs, plan, &mut state, target, &stop)
                     };
                     if work.samples > 0 {
                         let now = done.fetch_add(work.samples, Ordering::Relaxed) + work.samples;
@@ -755,7 +754,7 @@ pub fn mark_converged(acc: &mut Accumulation, adaptive: &Adaptive, level: u32) -
 }
 
 /// The camera rays of a render's pixel samples: what is shared by every
-/// pixel, computed once per pass.
+/// pixel, computed once per render.
 struct CameraSamples<'a> {
     camera: &'a crate::scene::Camera,
     /// The camera's rays of this image size.
@@ -868,7 +867,7 @@ pub fn retrace_aovs(scene: &Scene, accel: &dyn Accel, plan: &RenderPlan, acc: &m
 /// of them also tracing the albedo and normal. Stops before the next pixel
 /// once `cancel` is set.
 fn render_tile_pass(
-    scene: &Scene,
+    camera_samples: &CameraSamples,
     integrator: &dyn Integrator,
     aovs: &AovTracer,
     plan: &RenderPlan,
@@ -877,7 +876,6 @@ fn render_tile_pass(
     stop: &Stop,
 ) -> PassWork {
     let seed = plan.seed;
-    let camera_samples = CameraSamples::new(scene, plan);
     let tile = state.tile;
     let tw = (tile.x1 - tile.x0) as usize;
     let acc = &mut state.acc;
