@@ -11,7 +11,7 @@ use caustic::integrator::photon::{trace_photons_with, PhotonRules};
 use caustic::integrator::plan::{MediumPlan, PhotonPlan};
 use caustic::integrator::{render, RenderPlan, RenderSetup};
 use caustic::scene::LoadedScene;
-use caustic::scene::{parse_scene, CausticsMode, IntegratorKind};
+use caustic::scene::{parse_scene, CausticsMode, GatherMode, IntegratorKind};
 use common::cli::caustic;
 use std::path::Path;
 
@@ -327,27 +327,40 @@ fn absorbing_water_attenuates_by_the_transmittance_of_both_legs() {
 
 /// Sunlight through the water surface into a scattering medium: the light
 /// shafts (L S+ V) and the floor's caustic (L S+ D) come from the maps, the
-/// rest from paths; pure path tracing at many more samples agrees. The
-/// in-scattered light is about a third of the image: leaving the volume
-/// map out measures a ratio of 0.64.
+/// rest from paths; pure path tracing at many more samples agrees, with the
+/// floor's estimate interpolated from precomputed irradiance (the default)
+/// and gathered at every vertex. The in-scattered light is about a third of
+/// the image: leaving the volume map out measures a ratio of 0.64. Sites
+/// whose estimate counted their own photon measured +6.8 %.
 #[test]
 fn volume_and_surface_maps_match_pure_path_tracing_in_water() {
     let mut with_map = scene(&water(0.05, 0.15, false, "caustics = \"map\""));
     with_map.settings.spp = 32;
     let plan = RenderPlan::new(&with_map.scene, &with_map.settings);
     assert!(
-        matches!(plan.photons, PhotonPlan::Run { casters: 1, .. }),
+        matches!(
+            plan.photons,
+            PhotonPlan::Run {
+                casters: 1,
+                gather: GatherMode::Precomputed,
+                ..
+            }
+        ),
         "{:?}",
         plan.photons
     );
+    let mut direct = with_map.clone();
+    direct.settings.photons.gather = GatherMode::Direct;
     let mut as_paths = with_map.clone();
     as_paths.settings.photons.caustics = CausticsMode::Path;
     as_paths.settings.spp = 8192;
-    let (m, p) = (pixels(&with_map, 2), pixels(&as_paths, 2));
+    let p = pixels(&as_paths, 2);
     let mean = |p: &[[f64; 3]]| p.iter().flatten().sum::<f64>() / (p.len() * 3) as f64;
-    let ratio = mean(&m) / mean(&p);
-    eprintln!("water, map / path: {ratio:.4}");
-    assert!((ratio - 1.0).abs() < 0.05, "mean ratio {ratio}");
+    for (name, map) in [("precomputed", &with_map), ("direct", &direct)] {
+        let ratio = mean(&pixels(map, 2)) / mean(&p);
+        eprintln!("water, map ({name}) / path: {ratio:.4}");
+        assert!((ratio - 1.0).abs() < 0.03, "{name}: mean ratio {ratio}");
+    }
 }
 
 /// The same image on 1 and 3 threads, and the Whitted integrator ignores

@@ -31,7 +31,11 @@
 //! estimate, and every scattering vertex in the water the volume map's
 //! phase-weighted one (the camera path's first such vertex gathers `k`
 //! photons, later ones [`INDIRECT_GATHER_DIVISOR`] times fewer: their
-//! blur is hidden by the bounce). The maps hold exactly the light that
+//! blur is hidden by the bounce). Where the BSDF is one Lambert lobe and
+//! the map has precomputed irradiance (`gather = "precomputed"`, the
+//! default), that estimate is `kd/π` times the irradiance interpolated
+//! from the sites ([`PhotonMap::caustic_irradiance_cached`]) instead of a
+//! gather. The maps hold exactly the light that
 //! arrived through one or more delta bounces (L S+ D, L S+ V), so after a
 //! vertex samples a non-delta direction, light the path then reaches
 //! through delta bounces only (at least one, at most the photons' depth)
@@ -42,7 +46,7 @@
 use super::aov::FirstHit;
 use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
-use super::photon::{GatherParams, Kernel, PhotonMap, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
+use super::photon::{GatherParams, Kernel, PhotonMap, SiteCache, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
 use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::sample::{Integrator, RayCounts, SampleContext};
 use super::whitted::SHADOW_EPSILON;
@@ -164,7 +168,14 @@ impl<'a> PathTracer<'a> {
     /// random stream, starting from the camera ray's nearest hit (and
     /// perhaps its surface interaction) when the AOV tracer already found
     /// it for the same ray.
-    fn trace(&self, ray: &Ray, mut first: Option<&FirstHit>, rng: &mut Sampler, counts: &mut RayCounts) -> Vec3A {
+    fn trace(
+        &self,
+        ray: &Ray,
+        mut first: Option<&FirstHit>,
+        rng: &mut Sampler,
+        counts: &mut RayCounts,
+        sites: &mut SiteCache,
+    ) -> Vec3A {
         let mut l = Vec3A::ZERO;
         let mut beta = Vec3A::ONE;
         let mut ray = *ray;
@@ -333,7 +344,13 @@ impl<'a> PathTracer<'a> {
                 // The caustic map's estimate, `Σ f(ωo, ωp) Φp / (π r²)`.
                 if let Some(c) = &self.caustics {
                     let g = &c.surface[usize::from(!delta_chain)];
-                    let estimate = if let Some(kd) = bsdf.lambert() {
+                    let estimate = if let (Some(kd), true) = (bsdf.lambert(), c.map.precomputed_sites() > 0) {
+                        // One Lambert lobe and precomputed irradiance:
+                        // `kd/π · E`, `E` from the photons arriving on the
+                        // side the path leaves on.
+                        let n = if wo_geometric > 0.0 { si.ng } else { -si.ng };
+                        kd * (1.0 / std::f32::consts::PI) * c.map.caustic_irradiance_scattered(si.p, n, g, sites)
+                    } else if let Some(kd) = bsdf.lambert() {
                         // One Lambert lobe: `f` is `kd/π` wherever it is not
                         // zero, so each photon needs only its side tests
                         // (the lobe's and `consistent`'s, on the same
@@ -448,7 +465,7 @@ impl<'a> PathTracer<'a> {
 
 impl Integrator for PathTracer<'_> {
     fn radiance(&self, ray: &Ray, first_hit: Option<&FirstHit>, ctx: &mut SampleContext) -> Vec3A {
-        self.trace(ray, first_hit, ctx.rng, ctx.counts)
+        self.trace(ray, first_hit, ctx.rng, ctx.counts, ctx.sites)
     }
 }
 

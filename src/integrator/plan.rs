@@ -377,13 +377,9 @@ impl RenderPlan {
                 k: ps.k.max(1),
                 max_radius: ps.max_radius.unwrap_or_else(|| default_gather_radius(scene)),
                 cone_k: ps.cone_k,
-                // The BSDF-weighted and the progressive estimates have
+                // Progressive maps serve one sample per pixel each:
                 // nothing to precompute.
-                gather: if physical || ps.progressive {
-                    GatherMode::Direct
-                } else {
-                    ps.gather
-                },
+                gather: if ps.progressive { GatherMode::Direct } else { ps.gather },
                 progressive: ps.progressive.then(|| ProgressivePlan {
                     alpha: ps.alpha,
                     photons_per_pass: super::photon::progressive::photons_per_pass(ps.count, spp),
@@ -653,14 +649,14 @@ impl RenderPlan {
                 k,
                 max_radius,
                 cone_k,
+                gather,
                 progressive,
-                ..
             } if self.photon_rules == PhotonRules::Physical => Stage::ran(
                 "photon pass",
                 format!(
                     "{} through the path integrator's BSDFs, emission restricted to \
                      {casters} caster(s) with a delta lobe; caustics (L S+ D{}) from the map at every \
-                     non-specular vertex, {}, cone filter k = {cone_k}, BSDF-weighted",
+                     non-specular vertex, {}, cone filter k = {cone_k}, BSDF-weighted{}",
                     match progressive {
                         Some(p) => format!(
                             "progressive, {} photons per pass (one map per sample index, {} passes)",
@@ -682,6 +678,10 @@ impl RenderPlan {
                             "gather {k} nearest ({} after the first) within {max_radius:.4}",
                             (k as usize / super::photon::INDIRECT_GATHER_DIVISOR).max(1)
                         ),
+                    },
+                    match gather {
+                        GatherMode::Precomputed => format!("; on Lambert surfaces {gather}"),
+                        GatherMode::Direct => String::new(),
                     }
                 ),
             ),
