@@ -325,6 +325,29 @@ mod tests {
     use super::*;
     use crate::math::rng::{Domain, Rng};
 
+    /// A site at every [`PRECOMPUTE_STRIDE`]-th photon, as the photon pass
+    /// picks them.
+    fn every_stride(photons: &[Photon]) -> Vec<IrradianceSite> {
+        photons
+            .iter()
+            .step_by(PRECOMPUTE_STRIDE)
+            .map(|p| IrradianceSite {
+                position: p.position,
+                normal: p.normal,
+            })
+            .collect()
+    }
+
+    /// A photon of 1e-5 W that fell straight down onto the floor y = 0.
+    fn on_floor(x: f32, z: f32) -> Photon {
+        Photon {
+            position: Vec3A::new(x, 0.0, z),
+            incoming: Vec3A::Y,
+            normal: Vec3A::Y,
+            power: Vec3A::splat(1e-5),
+        }
+    }
+
     #[test]
     fn thinning_keeps_every_mth_site_and_at_most_the_bound() {
         let sites: Vec<IrradianceSite> = (0..1000)
@@ -373,22 +396,10 @@ mod tests {
                 let (a, b) = rng.f32x2();
                 // Denser toward x = 0: the sites' spacing varies.
                 let x = a * a * 2.0 - 1.0;
-                Photon {
-                    position: Vec3A::new(x, 0.0, b * 2.0 - 1.0),
-                    incoming: Vec3A::Y,
-                    normal: Vec3A::Y,
-                    power: Vec3A::splat(1e-5),
-                }
+                on_floor(x, b * 2.0 - 1.0)
             })
             .collect();
-        let sites = photons
-            .iter()
-            .step_by(PRECOMPUTE_STRIDE)
-            .map(|p| IrradianceSite {
-                position: p.position,
-                normal: p.normal,
-            })
-            .collect();
+        let sites = every_stride(&photons);
         let g = GatherParams {
             k: NonZero::new(64).unwrap(),
             max_radius: 0.15,
@@ -449,12 +460,7 @@ mod tests {
             // Box–Muller: a spot of standard deviation 0.3 at the origin.
             let r = (-2.0 * (1.0 - a).ln()).sqrt() * 0.3;
             let phi = b * std::f32::consts::TAU;
-            photons.push(Photon {
-                position: Vec3A::new(r * phi.cos(), 0.0, r * phi.sin()),
-                incoming: Vec3A::Y,
-                normal: Vec3A::Y,
-                power: Vec3A::splat(1e-5),
-            });
+            photons.push(on_floor(r * phi.cos(), r * phi.sin()));
         }
         for _ in 0..200_000 {
             // A wall at x = 1 lit from −x.
@@ -466,14 +472,7 @@ mod tests {
                 power: Vec3A::splat(1e-5),
             });
         }
-        let sites: Vec<IrradianceSite> = photons
-            .iter()
-            .step_by(PRECOMPUTE_STRIDE)
-            .map(|p| IrradianceSite {
-                position: p.position,
-                normal: p.normal,
-            })
-            .collect();
+        let sites: Vec<IrradianceSite> = every_stride(&photons);
         let g = GatherParams {
             k: NonZero::new(64).unwrap(),
             max_radius: 0.2,
@@ -540,22 +539,10 @@ mod tests {
             let x = a * 2.0 - 1.0;
             let density = 1.0 + 0.95 * (std::f32::consts::TAU * x / 0.2).sin();
             if u * 1.95 <= density {
-                photons.push(Photon {
-                    position: Vec3A::new(x, 0.0, b * 2.0 - 1.0),
-                    incoming: Vec3A::Y,
-                    normal: Vec3A::Y,
-                    power: Vec3A::splat(1e-5),
-                });
+                photons.push(on_floor(x, b * 2.0 - 1.0));
             }
         }
-        let sites = photons
-            .iter()
-            .step_by(PRECOMPUTE_STRIDE)
-            .map(|p| IrradianceSite {
-                position: p.position,
-                normal: p.normal,
-            })
-            .collect();
+        let sites = every_stride(&photons);
         let g = GatherParams::k_nearest(NonZero::new(64).unwrap(), 0.2, 1.1);
         let mut map = PhotonMap::from_photons(&photons);
         let qs: Vec<Vec3A> = (0..4000)
