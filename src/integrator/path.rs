@@ -349,7 +349,15 @@ impl<'a> PathTracer<'a> {
                         // `kd/π · E`, `E` from the photons arriving on the
                         // side the path leaves on.
                         let n = if wo_geometric > 0.0 { si.ng } else { -si.ng };
-                        kd * (1.0 / std::f32::consts::PI) * c.map.caustic_irradiance_scattered(si.p, n, g, sites)
+                        // The first such vertex of a pixel's samples lies
+                        // beside the last one's: the site cache answers it.
+                        // Later vertices scatter.
+                        let e = if delta_chain {
+                            c.map.caustic_irradiance_cached(si.p, n, g, sites)
+                        } else {
+                            c.map.caustic_irradiance_scattered(si.p, n, g, sites)
+                        };
+                        kd * (1.0 / std::f32::consts::PI) * e
                     } else if let Some(kd) = bsdf.lambert() {
                         // One Lambert lobe: `f` is `kd/π` wherever it is not
                         // zero, so each photon needs only its side tests

@@ -203,7 +203,8 @@ impl PhotonMap {
     /// [`caustic_irradiance`](Self::caustic_irradiance) for lookups in no
     /// particular order (the vertices of random paths), which a cache of
     /// recent neighbourhoods would rarely answer: `cache` lends only its
-    /// buffers, and the result is the same.
+    /// buffers. The sites are those of the cached lookup; the tree's
+    /// distances and ties may differ from the cache's in the last bit.
     #[inline]
     pub fn caustic_irradiance_scattered(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
         match &self.precomputed {

@@ -61,9 +61,11 @@ impl NeighbourCache {
         }
     }
 
-    /// What [`nearest`](Self::nearest) answers, from the tree alone: for
-    /// queries in no particular order (a path's vertices), where an entry
-    /// would rarely answer and every miss would search twice.
+    /// What [`nearest`](Self::nearest) answers, from the tree alone (its
+    /// distances, and its choice among points tied at the k-th distance,
+    /// may differ in the last bit): for queries in no particular order (a
+    /// path's vertices), where an entry would rarely answer and every miss
+    /// would search twice.
     pub fn nearest_uncached(
         tree: &ChunkedTree,
         q: &[f32; 3],
