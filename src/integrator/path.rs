@@ -34,8 +34,10 @@
 //! blur is hidden by the bounce). Where the BSDF is one Lambert lobe and
 //! the map has precomputed irradiance (`gather = "precomputed"`, the
 //! default), that estimate is `kd/π` times the irradiance interpolated
-//! from the sites ([`PhotonMap::caustic_irradiance_cached`]) instead of a
-//! gather. The maps hold exactly the light that
+//! from the sites ([`PhotonMap::caustic_irradiance_cached`]) at the first
+//! such vertex, and the nearest site's alone
+//! ([`PhotonMap::caustic_irradiance_nearest_site`]) at later ones, instead
+//! of a gather. The maps hold exactly the light that
 //! arrived through one or more delta bounces (L S+ D, L S+ V), so after a
 //! vertex samples a non-delta direction, light the path then reaches
 //! through delta bounces only (at least one, at most the photons' depth)
@@ -351,11 +353,12 @@ impl<'a> PathTracer<'a> {
                         let n = if wo_geometric > 0.0 { si.ng } else { -si.ng };
                         // The first such vertex of a pixel's samples lies
                         // beside the last one's: the site cache answers it.
-                        // Later vertices scatter.
+                        // Later vertices scatter, and a diffuse bounce hides
+                        // the nearest site's Voronoi cell.
                         let e = if delta_chain {
                             c.map.caustic_irradiance_cached(si.p, n, g, sites)
                         } else {
-                            c.map.caustic_irradiance_scattered(si.p, n, g, sites)
+                            c.map.caustic_irradiance_nearest_site(si.p, n, g, sites)
                         };
                         kd * (1.0 / std::f32::consts::PI) * e
                     } else if let Some(kd) = bsdf.lambert() {

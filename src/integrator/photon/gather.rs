@@ -21,7 +21,7 @@
 
 use super::chunked::Neighbour;
 use super::map::{to_tree, PhotonMap, PhotonRecord};
-use super::precomputed::SiteCache;
+use super::precomputed::{SiteCache, SiteSearch};
 use crate::math::Vec3A;
 use std::f32::consts::PI;
 use std::num::NonZero;
@@ -195,7 +195,7 @@ impl PhotonMap {
     #[inline]
     pub fn caustic_irradiance_cached(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
         match &self.precomputed {
-            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, true),
+            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::Cached),
             _ => self.irradiance(p, n, g),
         }
     }
@@ -208,7 +208,26 @@ impl PhotonMap {
     #[inline]
     pub fn caustic_irradiance_scattered(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
         match &self.precomputed {
-            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, false),
+            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::Uncached),
+            _ => self.irradiance(p, n, g),
+        }
+    }
+
+    /// The estimate of the nearest precomputed site alone (Christensen's
+    /// own lookup), for vertices whose blur a diffuse bounce hides; the
+    /// same fallbacks to the direct gather as
+    /// [`caustic_irradiance`](Self::caustic_irradiance). `cache` lends only
+    /// its buffers.
+    #[inline]
+    pub fn caustic_irradiance_nearest_site(
+        &self,
+        p: Vec3A,
+        n: Vec3A,
+        g: &GatherParams,
+        cache: &mut SiteCache,
+    ) -> Vec3A {
+        match &self.precomputed {
+            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::NearestOnly),
             _ => self.irradiance(p, n, g),
         }
     }
