@@ -34,10 +34,9 @@
 //! blur is hidden by the bounce). Where the BSDF is one Lambert lobe and
 //! the map has precomputed irradiance (`gather = "precomputed"`, the
 //! default), that estimate is `kd/π` times the irradiance interpolated
-//! from the sites ([`PhotonMap::caustic_irradiance_cached`]) at the first
-//! such vertex, and the nearest site's alone
-//! ([`PhotonMap::caustic_irradiance_nearest_site`]) at later ones, instead
-//! of a gather. The maps hold exactly the light that
+//! from the sites ([`PhotonMap::caustic_irradiance_with`]) at the first
+//! such vertex, and the nearest site's alone at later ones, instead of a
+//! gather. The maps hold exactly the light that
 //! arrived through one or more delta bounces (L S+ D, L S+ V), so after a
 //! vertex samples a non-delta direction, light the path then reaches
 //! through delta bounces only (at least one, at most the photons' depth)
@@ -48,7 +47,9 @@
 use super::aov::FirstHit;
 use super::lights::LightSampler;
 use super::medium::{Flight, MediumTracker, WaterVolume};
-use super::photon::{GatherParams, Kernel, PhotonMap, SiteCache, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH};
+use super::photon::{
+    GatherParams, Kernel, PhotonMap, SiteCache, SiteSearch, INDIRECT_GATHER_DIVISOR, PHOTON_PATH_DEPTH,
+};
 use super::plan::{MediumPlan, PhotonPlan, RenderPlan, ROULETTE_DEPTH};
 use super::sample::{Integrator, RayCounts, SampleContext};
 use super::whitted::SHADOW_EPSILON;
@@ -346,39 +347,42 @@ impl<'a> PathTracer<'a> {
                 // The caustic map's estimate, `Σ f(ωo, ωp) Φp / (π r²)`.
                 if let Some(c) = &self.caustics {
                     let g = &c.surface[usize::from(!delta_chain)];
-                    let estimate = if let (Some(kd), true) = (bsdf.lambert(), c.map.precomputed_sites() > 0) {
-                        // One Lambert lobe and precomputed irradiance:
-                        // `kd/π · E`, `E` from the photons arriving on the
-                        // side the path leaves on.
-                        let n = if wo_geometric > 0.0 { si.ng } else { -si.ng };
-                        // The first such vertex of a pixel's samples lies
-                        // beside the last one's: the site cache answers it.
-                        // Later vertices scatter, and a diffuse bounce hides
-                        // the nearest site's Voronoi cell.
-                        let e = if delta_chain {
-                            c.map.caustic_irradiance_cached(si.p, n, g, sites)
-                        } else {
-                            c.map.caustic_irradiance_nearest_site(si.p, n, g, sites)
-                        };
-                        kd * (1.0 / std::f32::consts::PI) * e
-                    } else if let Some(kd) = bsdf.lambert() {
-                        // One Lambert lobe: `f` is `kd/π` wherever it is not
-                        // zero, so each photon needs only its side tests
-                        // (the lobe's and `consistent`'s, on the same
-                        // numbers), not a BSDF evaluation; the sum is the
-                        // same, term by term.
-                        let f = kd * (1.0 / std::f32::consts::PI);
-                        c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
-                            let wi_world = r.incoming();
-                            let wi_z = wi_world.dot(frame.n);
-                            if consistent(wi_world, wi_z) && bsdf.lambert_reflects(wo.z, wi_z) {
-                                f * r.power()
+                    let estimate = match bsdf.lambert() {
+                        Some(kd) if c.map.precomputed_sites() > 0 => {
+                            // One Lambert lobe and precomputed irradiance:
+                            // `kd/π · E`, `E` from the photons arriving on the
+                            // side the path leaves on.
+                            let n = if wo_geometric > 0.0 { si.ng } else { -si.ng };
+                            // The first such vertex of a pixel's samples lies
+                            // beside the last one's: the site cache answers it.
+                            // Later vertices scatter, and a diffuse bounce hides
+                            // the nearest site's Voronoi cell.
+                            let search = if delta_chain {
+                                SiteSearch::Cached
                             } else {
-                                Vec3A::ZERO
-                            }
-                        })
-                    } else {
-                        c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
+                                SiteSearch::NearestOnly
+                            };
+                            let e = c.map.caustic_irradiance_with(si.p, n, g, search, sites);
+                            kd * (1.0 / std::f32::consts::PI) * e
+                        }
+                        Some(kd) => {
+                            // One Lambert lobe: `f` is `kd/π` wherever it is not
+                            // zero, so each photon needs only its side tests
+                            // (the lobe's and `consistent`'s, on the same
+                            // numbers), not a BSDF evaluation; the sum is the
+                            // same, term by term.
+                            let f = kd * (1.0 / std::f32::consts::PI);
+                            c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
+                                let wi_world = r.incoming();
+                                let wi_z = wi_world.dot(frame.n);
+                                if consistent(wi_world, wi_z) && bsdf.lambert_reflects(wo.z, wi_z) {
+                                    f * r.power()
+                                } else {
+                                    Vec3A::ZERO
+                                }
+                            })
+                        }
+                        None => c.map.weighted_estimate(si.p, g, Kernel::Disk, |r| {
                             let wi_world = r.incoming();
                             let wi = frame.to_local(wi_world);
                             if consistent(wi_world, wi.z) {
@@ -386,7 +390,7 @@ impl<'a> PathTracer<'a> {
                             } else {
                                 Vec3A::ZERO
                             }
-                        })
+                        }),
                     };
                     l += beta * estimate;
                 }

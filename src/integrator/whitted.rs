@@ -43,7 +43,7 @@
 
 use super::aov::FirstHit;
 use super::fog;
-use super::photon::{GatherParams, PhotonMap};
+use super::photon::{GatherParams, PhotonMap, SiteSearch};
 use super::plan::{FogPlan, PhotonPlan, RenderPlan, ShadowSampling};
 use super::sample::{Integrator, SampleContext};
 use crate::accel::Accel;
@@ -412,7 +412,7 @@ impl<'a> Whitted<'a> {
         }
         if !highlights_only && flags.contains(LobeFlags::DIFFUSE) {
             if let Some((map, g)) = &self.caustics {
-                out += m.diffuse * (1.0 / PI) * map.caustic_irradiance_cached(si.p, ng, g, ctx.sites);
+                out += m.diffuse * (1.0 / PI) * map.caustic_irradiance_with(si.p, ng, g, SiteSearch::Cached, ctx.sites);
             }
         }
         out

@@ -186,48 +186,25 @@ impl PhotonMap {
     /// [`PhotonMap::irradiance`].
     #[inline]
     pub fn caustic_irradiance(&self, p: Vec3A, n: Vec3A, g: &GatherParams) -> Vec3A {
-        self.caustic_irradiance_scattered(p, n, g, &mut SiteCache::default())
+        self.caustic_irradiance_with(p, n, g, SiteSearch::Uncached, &mut SiteCache::default())
     }
 
-    /// [`caustic_irradiance`](Self::caustic_irradiance), reusing the site
-    /// searches of earlier nearby lookups kept in `cache`: the same result,
-    /// faster when lookups come in image order (see [`SiteCache`]).
+    /// [`caustic_irradiance`](Self::caustic_irradiance) with the sites
+    /// found by `search` (see [`SiteSearch`]); `cache` holds the search's
+    /// buffers and, for [`SiteSearch::Cached`], the neighbourhoods of
+    /// earlier lookups. Without precomputed sites, or for a fixed-radius
+    /// gather, the direct gather.
     #[inline]
-    pub fn caustic_irradiance_cached(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
-        match &self.precomputed {
-            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::Cached),
-            _ => self.irradiance(p, n, g),
-        }
-    }
-
-    /// [`caustic_irradiance`](Self::caustic_irradiance) for lookups in no
-    /// particular order (the vertices of random paths), which a cache of
-    /// recent neighbourhoods would rarely answer: `cache` lends only its
-    /// buffers. The sites are those of the cached lookup; the tree's
-    /// distances and ties may differ from the cache's in the last bit.
-    #[inline]
-    pub fn caustic_irradiance_scattered(&self, p: Vec3A, n: Vec3A, g: &GatherParams, cache: &mut SiteCache) -> Vec3A {
-        match &self.precomputed {
-            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::Uncached),
-            _ => self.irradiance(p, n, g),
-        }
-    }
-
-    /// The estimate of the nearest precomputed site alone (Christensen's
-    /// own lookup), for vertices whose blur a diffuse bounce hides; the
-    /// same fallbacks to the direct gather as
-    /// [`caustic_irradiance`](Self::caustic_irradiance). `cache` lends only
-    /// its buffers.
-    #[inline]
-    pub fn caustic_irradiance_nearest_site(
+    pub fn caustic_irradiance_with(
         &self,
         p: Vec3A,
         n: Vec3A,
         g: &GatherParams,
+        search: SiteSearch,
         cache: &mut SiteCache,
     ) -> Vec3A {
         match &self.precomputed {
-            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, SiteSearch::NearestOnly),
+            Some(pre) if g.fixed_radius.is_none() => pre.lookup(self, (p, n), g, cache, search),
             _ => self.irradiance(p, n, g),
         }
     }

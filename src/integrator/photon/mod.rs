@@ -41,7 +41,7 @@ pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTrace
 pub use file::{read_photons, write_photons, PhotonFileError};
 pub use gather::{GatherParams, Kernel, INDIRECT_GATHER_DIVISOR, VOLUME_RADIUS_SCALE};
 pub use map::{Photon, PhotonMap, PhotonRecord, BYTES_PER_PHOTON, PEAK_BYTES_PER_PHOTON};
-pub use precomputed::{IrradianceSite, Precompute, SiteCache, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
+pub use precomputed::{IrradianceSite, Precompute, SiteCache, SiteSearch, PRECOMPUTE_STRIDE, SITES_PER_PIXEL};
 pub use source::CausticsSource;
 
 use crate::accel::Accel;

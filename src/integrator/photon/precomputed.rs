@@ -251,11 +251,14 @@ impl PrecomputedIrradiance {
 
 /// How a lookup finds its sites.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum SiteSearch {
+pub enum SiteSearch {
     /// The [`INTERPOLATED_SITES`] nearest, through the cache of recent
-    /// neighbourhoods (lookups in image order).
+    /// neighbourhoods (lookups in image order): the same result as
+    /// without it, faster.
     Cached,
-    /// The same sites from the tree alone (lookups in no order).
+    /// The same sites from the tree alone (lookups in no particular
+    /// order, which the cache would rarely answer); the tree's distances
+    /// and ties may differ from the cache's in the last bit.
     Uncached,
     /// The nearest site alone, Christensen's lookup: its Voronoi cells
     /// show, but not after a diffuse bounce, and a cell's area is the
@@ -273,7 +276,7 @@ const SITE_SEARCH_FACTOR: f32 = 1.6;
 const SITE_CACHE_ENTRIES: usize = 4;
 
 /// Recent site searches of one rendering thread, reused by nearby lookups
-/// ([`PhotonMap::caustic_irradiance_cached`]; see
+/// ([`PhotonMap::caustic_irradiance_with`]; see
 /// [`neighbourhood`](super::neighbourhood)). It changes only how fast a
 /// lookup is, never its result, so it may be shared by any sequence of
 /// lookups (a tile, a pixel) without affecting determinism.
@@ -438,9 +441,9 @@ mod tests {
             } else {
                 p + Vec3A::new(a - 0.5, 0.0, b - 0.5) * 0.004
             };
-            let cached = map.caustic_irradiance_cached(p, Vec3A::Y, &g, &mut cache);
+            let cached = map.caustic_irradiance_with(p, Vec3A::Y, &g, SiteSearch::Cached, &mut cache);
             let fresh = map.caustic_irradiance(p, Vec3A::Y, &g);
-            let scattered = map.caustic_irradiance_scattered(p, Vec3A::Y, &g, &mut cache);
+            let scattered = map.caustic_irradiance_with(p, Vec3A::Y, &g, SiteSearch::Uncached, &mut cache);
             assert_eq!(
                 cached.to_array().map(f32::to_bits),
                 fresh.to_array().map(f32::to_bits),
@@ -589,7 +592,10 @@ mod tests {
         let mut cache = SiteCache::default();
         let nearest: f64 = qs
             .iter()
-            .map(|&q| map.caustic_irradiance_nearest_site(q, Vec3A::Y, &g, &mut cache).x as f64)
+            .map(|&q| {
+                map.caustic_irradiance_with(q, Vec3A::Y, &g, SiteSearch::NearestOnly, &mut cache)
+                    .x as f64
+            })
             .sum();
         assert!(
             (nearest / direct - 1.0).abs() < 0.03,
