@@ -39,15 +39,13 @@ pub fn chunk_depth(n: usize) -> u32 {
     n.div_ceil(CHUNK_TARGET).next_power_of_two().ilog2().min(MAX_DEPTH)
 }
 
-/// One chunk: its points' bounds (tree coordinates), its tree, the
-/// concatenated index of its first point, and, when kept, its points in
-/// item order.
+/// One chunk: its points' bounds (tree coordinates), its tree and the
+/// concatenated index of its first point.
 struct Chunk {
     min: [f32; 3],
     max: [f32; 3],
     tree: PhotonTree,
     offset: u32,
-    points: Vec<[f32; 3]>,
 }
 
 impl Chunk {
@@ -194,6 +192,23 @@ pub(super) fn distance2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
+/// The `k` nearest of `points` to `q` within squared distance `r2` by brute
+/// force, as (distance bits, index) in the total order of answers: what
+/// the spatial structures' tests compare against.
+#[cfg(test)]
+pub(super) fn brute_force_nearest(points: &[[f32; 3]], q: &[f32; 3], r2: f32, k: usize) -> Vec<(u32, u32)> {
+    let mut all: Vec<(u32, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (distance2(q, p), i as u32))
+        .filter(|&(d, _)| d <= r2)
+        .map(|(d, i)| (d.to_bits(), i))
+        .collect();
+    all.sort_unstable();
+    all.truncate(k);
+    all
+}
+
 /// A point's key along `axis`: its coordinate's bits mapped to an unsigned
 /// integer in the order of `f32::total_cmp`, then its index; a total order
 /// compared without branches.
@@ -247,10 +262,7 @@ impl ChunkedTree {
     /// shuffled ones), and the items of a leaf, hence the payloads a query
     /// reads, become neighbours in memory (the figures:
     /// docs/benchmarks-history.md, "The photon pass").
-    ///
-    /// With `keep_points`, each chunk keeps its points in item order (12
-    /// bytes each) for [`within_points`](Self::within_points).
-    pub fn build(points: Vec<[f32; 3]>, depth: u32, keep_points: bool) -> (Self, Vec<u32>) {
+    pub fn build(points: Vec<[f32; 3]>, depth: u32) -> (Self, Vec<u32>) {
         assert!(points.len() <= u32::MAX as usize, "too many points for u32 indices");
         let n = points.len();
         let mut sample: Vec<([f32; 3], u32)> = (0..n)
@@ -282,34 +294,10 @@ impl ChunkedTree {
                     max,
                     tree: PhotonTree::new_from_slice(&points),
                     offset,
-                    points: if keep_points { points } else { Vec::new() },
                 }
             })
             .collect();
         (Self { cuts, chunks }, order)
-    }
-
-    /// Bytes held by the kept copies of the points.
-    pub fn points_bytes(&self) -> usize {
-        self.chunks.iter().map(|c| c.points.len() * 12).sum()
-    }
-
-    /// Every point within squared distance `r2` of `q` (inclusive) with its
-    /// position, in no particular order, into `out` (cleared first). Needs
-    /// the points kept (`build`).
-    pub fn within_points(&self, q: &[f32; 3], r2: f32, out: &mut Vec<([f32; 3], u32)>) {
-        out.clear();
-        let mut reach = r2;
-        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
-            debug_assert!(c.points.len() == c.tree.size(), "points forgotten");
-            out.extend(
-                c.tree
-                    .within_unsorted::<SquaredEuclidean>(q, r2)
-                    .into_iter()
-                    .filter_map(|nb| Some((*c.points.get(nb.item as usize)?, c.offset + nb.item))),
-            );
-            r2
-        });
     }
 
     /// Every point within squared distance `r2` of `q` (inclusive), in a
@@ -366,26 +354,6 @@ impl ChunkedTree {
             bound
         });
         found
-    }
-
-    /// The nearest point to `q`, if any (ties by item).
-    pub fn nearest_one(&self, q: &[f32; 3]) -> Option<Neighbour> {
-        let mut best: Option<Neighbour> = None;
-        let mut reach = f32::INFINITY;
-        self.cuts.walk(&self.chunks, q, &mut reach, &mut |c| {
-            if c.tree.size() > 0 {
-                let nb = c.tree.nearest_one::<SquaredEuclidean>(q);
-                let cand = Neighbour {
-                    distance: nb.distance,
-                    item: c.offset + nb.item,
-                };
-                if best.is_none_or(|b| cand.order_key() < b.order_key()) {
-                    best = Some(cand);
-                }
-            }
-            best.map_or(f32::INFINITY, |b| b.distance)
-        });
-        best
     }
 }
 
@@ -606,30 +574,26 @@ mod tests {
     /// that keeps tied points in input order.
     #[test]
     fn sparse_and_tied_points_match_brute_force() {
-        let empty = ChunkedTree::build(Vec::new(), 4, true);
+        let empty = ChunkedTree::build(Vec::new(), 4);
         assert!(empty.1.is_empty());
-        assert!(empty.0.nearest_one(&[0.0; 3]).is_none());
         let k = NonZero::new(5).unwrap();
         assert!(empty.0.nearest_n_within(&[0.0; 3], 1.0, k).is_empty());
         let mut points: Vec<[f32; 3]> = (0..300).map(|i| [(i % 7) as f32, 0.5, (i % 3) as f32]).collect();
         points.extend(std::iter::repeat_n([2.0, 0.5, 1.0], 200));
-        let (tree, order) = ChunkedTree::build(points.clone(), 8, true);
+        let (tree, order) = ChunkedTree::build(points.clone(), 8);
         assert_eq!(tree.chunks.len(), 256);
         let mut sorted = order.clone();
         sorted.sort_unstable();
         assert!(sorted.iter().enumerate().all(|(i, &j)| i as u32 == j));
         for c in &tree.chunks {
             let ids = &order[c.offset as usize..c.offset as usize + c.tree.size()];
-            // The kept points are the input points `order` names...
-            assert!(ids.iter().zip(&c.points).all(|(&i, p)| points[i as usize] == *p));
-            // ... and equal points keep their input order.
+            // Equal points keep their input order.
             assert!(
                 ids.windows(2)
                     .all(|w| points[w[0] as usize] != points[w[1] as usize] || w[0] < w[1]),
                 "a chunk lost the input order of ties"
             );
         }
-        let mut found = Vec::new();
         for q in [[2.0, 0.5, 1.0], [0.2, 0.4, 2.1], [6.5, 0.5, -1.0]] {
             let d2 = |p: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]) * (p[i] - q[i])).sum::<f32>();
             let mut brute: Vec<f32> = points.iter().map(d2).collect();
@@ -638,9 +602,6 @@ mod tests {
             got.sort_by(|a, b| a.total_cmp(b));
             let want: Vec<f32> = brute.iter().copied().filter(|&d| d <= 2.0).take(5).collect();
             assert_eq!(got, want);
-            assert_eq!(tree.nearest_one(&q).unwrap().distance, brute[0]);
-            tree.within_points(&q, 1.5, &mut found);
-            assert_eq!(found.len(), brute.iter().filter(|&&d| d <= 1.5).count());
         }
     }
 
@@ -654,7 +615,7 @@ mod tests {
                 [a * 4.0, (a * 13.0).fract(), b * 2.0]
             })
             .collect();
-        let (tree, order) = ChunkedTree::build(points.clone(), 3, false);
+        let (tree, order) = ChunkedTree::build(points.clone(), 3);
         assert_eq!(tree.chunks.len(), 8);
         let mut sorted = order.clone();
         sorted.sort_unstable();
@@ -678,8 +639,6 @@ mod tests {
             got.sort_by(|a, b| a.total_cmp(b));
             let want: Vec<f32> = brute.iter().copied().filter(|&d| d <= r2).take(10).collect();
             assert_eq!(got, want);
-            let one = tree.nearest_one(&q).unwrap();
-            assert_eq!(one.distance, brute[0]);
         }
     }
 }

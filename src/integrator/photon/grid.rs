@@ -380,21 +380,9 @@ fn fine_cell(p: &[f32; 3], origin: &[f32; 3], inv_fine: f32) -> [u32; 3] {
 
 #[cfg(test)]
 mod tests {
+    use super::super::chunked::brute_force_nearest as brute;
     use super::*;
     use crate::math::rng::{Domain, Rng};
-
-    fn brute(points: &[[f32; 3]], q: &[f32; 3], r2: f32, k: usize) -> Vec<(u32, u32)> {
-        let mut all: Vec<(u32, u32)> = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (distance2(q, p), i as u32))
-            .filter(|&(d, _)| d <= r2)
-            .map(|(d, i)| (d.to_bits(), i))
-            .collect();
-        all.sort_unstable();
-        all.truncate(k);
-        all
-    }
 
     /// The answer as (distance bits, input index), sorted.
     fn sorted(found: &[Neighbour], order: &[u32]) -> Vec<(u32, u32)> {

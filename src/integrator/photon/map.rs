@@ -213,9 +213,9 @@ pub fn decode_octahedral(e: [u16; 2]) -> Vec3A {
 
 /// Builds the chunked trees over `positions` (already in tree
 /// coordinates); see [`super::chunked`] for the returned order.
-pub(super) fn build_tree(positions: Vec<[f32; 3]>, keep_points: bool) -> (ChunkedTree, Vec<u32>) {
+pub(super) fn build_tree(positions: Vec<[f32; 3]>) -> (ChunkedTree, Vec<u32>) {
     let depth = chunk_depth(positions.len());
-    ChunkedTree::build(positions, depth, keep_points)
+    ChunkedTree::build(positions, depth)
 }
 
 /// `items` reordered so that `out[j] = items[order[j]]`.
@@ -314,7 +314,7 @@ impl PhotonMap {
         if let Some(r) = grid_radius {
             let (grid, order) = PhotonGrid::build(&positions, r, 0);
             return Self {
-                tree: build_tree(Vec::new(), false).0,
+                tree: build_tree(Vec::new()).0,
                 rotation,
                 records: reorder(records, &order),
                 grid: Some(grid),
@@ -324,7 +324,7 @@ impl PhotonMap {
                 volume: None,
             };
         }
-        let (tree, order) = build_tree(positions, false);
+        let (tree, order) = build_tree(positions);
         let records = reorder(records, &order);
         let coarse = coarse.map_or_else(Vec::new, |c| reorder(c, &order));
         Self {

@@ -14,6 +14,8 @@
 //!   within a fixed radius;
 //! - [`neighbourhood`]: exact k-nearest queries answered from a cached
 //!   neighbourhood (triangle inequality);
+//! - [`site_tree`]: the k-d tree of the precomputed irradiance sites, for
+//!   one- and few-nearest queries;
 //! - [`precomputed`]: irradiance precomputed at every few stored photons
 //!   (Christensen 1999) and the per-thread site cache;
 //! - [`mod@file`]: photon files (`caustic photons`, `--photon-map`);
@@ -35,6 +37,7 @@ pub mod map;
 pub mod neighbourhood;
 pub mod precomputed;
 pub mod progressive;
+pub mod site_tree;
 pub mod source;
 
 pub use emit::{delta_casters, specular_casters, Caster, PhotonRules, PhotonTracer, TraceSettings, PHOTON_PATH_DEPTH};

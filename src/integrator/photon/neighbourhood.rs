@@ -14,7 +14,8 @@
 //! sequence of queries may share one (a tile, a rayon task) without
 //! affecting determinism.
 
-use super::chunked::{distance2, ChunkedTree, Neighbour};
+use super::chunked::{distance2, Neighbour};
+use super::site_tree::SiteTree;
 use std::num::NonZero;
 
 /// Relative margin of the exactness test, far above the rounding of the
@@ -61,21 +62,18 @@ impl NeighbourCache {
         }
     }
 
-    /// What [`nearest`](Self::nearest) answers, from the tree alone (its
-    /// distances, and its choice among points tied at the k-th distance,
-    /// may differ in the last bit): for queries in no particular order (a
-    /// path's vertices), where an entry would rarely answer and every miss
-    /// would search twice.
+    /// What [`nearest`](Self::nearest) answers, from the tree alone (the
+    /// same distances, computed alike, and the same order): for queries in
+    /// no particular order (a path's vertices), where an entry would rarely
+    /// answer and every miss would search twice.
     pub fn nearest_uncached(
-        tree: &ChunkedTree,
+        tree: &SiteTree,
         q: &[f32; 3],
         max_radius: f32,
         k: NonZero<usize>,
         out: &mut Vec<Neighbour>,
     ) {
-        out.clear();
-        out.extend(tree.nearest_n_within(q, max_radius * max_radius, k));
-        out.sort_unstable_by_key(Neighbour::order_key);
+        tree.nearest_n_within(q, max_radius * max_radius, k.get(), out);
     }
 
     /// The `k` nearest points of `tree` (its points kept) to `q` within
@@ -87,7 +85,7 @@ impl NeighbourCache {
     /// it asks the tree for the answer's reach.
     pub fn nearest(
         &mut self,
-        tree: &ChunkedTree,
+        tree: &SiteTree,
         q: &[f32; 3],
         max_radius: f32,
         k: NonZero<usize>,
@@ -125,9 +123,10 @@ impl NeighbourCache {
                 return;
             }
         }
-        let near = tree.nearest_n_within(q, max_radius * max_radius, k);
-        let reach = if near.len() == k.get() {
-            near.iter().fold(0.0f32, |m, nb| m.max(nb.distance)).sqrt()
+        // `out` is overwritten by `fill` below.
+        tree.nearest_n_within(q, max_radius * max_radius, k.get(), out);
+        let reach = if out.len() == k.get() {
+            out.last().map_or(max_radius, |nb| nb.distance.sqrt())
         } else {
             max_radius
         };
@@ -142,7 +141,7 @@ impl NeighbourCache {
 /// distances and ours may differ by rounding.
 fn fill(
     entry: &mut Neighbourhood,
-    tree: &ChunkedTree,
+    tree: &SiteTree,
     q: &[f32; 3],
     radius: f32,
     max_radius: f32,
@@ -222,7 +221,7 @@ mod tests {
                 [a * a * 2.0, 0.3 * a + 0.01 * b, b * 2.0]
             })
             .collect();
-        let (tree, order) = ChunkedTree::build(points.clone(), 2, true);
+        let (tree, order) = SiteTree::build(points.clone());
         for (k, max_radius) in [(8usize, 0.2f32), (64, 0.15)] {
             let k = NonZero::new(k).unwrap();
             let mut cache = NeighbourCache::new(3, 1.6);

@@ -32,16 +32,16 @@
 //! Both are measured by the tests `precomputed_matches_direct` and
 //! `precomputed_follows_direct_across_stripes`.
 //!
-//! Memory per site: 16 bytes in the tree's leaves, 12 in the entry; one
-//! site per 8 photons adds ≈ 3.5 bytes per photon.
+//! The sites are searched in their own k-d tree ([`SiteTree`]), made for
+//! one- and eight-site queries. Memory per site: 12 bytes in the tree, 12
+//! in the entry; one site per 8 photons adds ≈ 3 bytes per photon.
 
-use super::chunked::{ChunkedTree, Neighbour};
+use super::chunked::Neighbour;
 use super::gather::GatherParams;
 use super::map::PhotonMap;
-use super::map::{
-    build_tree, decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, reorder, to_tree, tree_bytes,
-};
+use super::map::{decode_octahedral, decode_rgbe, encode_octahedral, encode_rgbe, reorder, to_tree};
 use super::neighbourhood::NeighbourCache;
+use super::site_tree::SiteTree;
 use crate::math::sampling::morton_code;
 use crate::math::Vec3A;
 use rayon::prelude::*;
@@ -153,9 +153,9 @@ impl SiteEntry {
 
 /// The sites' tree and estimates.
 pub(super) struct PrecomputedIrradiance {
-    /// The sites' tree, its points kept: cached neighbourhoods
-    /// ([`SiteCache`]) are re-ranked from them.
-    tree: ChunkedTree,
+    /// The sites' tree; cached neighbourhoods ([`SiteCache`]) are re-ranked
+    /// from its points.
+    tree: SiteTree,
     entries: Vec<SiteEntry>,
     /// Square of the factor on a site's radius within which its estimate
     /// is used (see [`reach2`]).
@@ -180,8 +180,7 @@ fn reach2(photons_per_site: f32, k: usize) -> f32 {
 impl PrecomputedIrradiance {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        let n = self.entries.len();
-        tree_bytes(n) + self.tree.points_bytes() + n * std::mem::size_of::<SiteEntry>()
+        self.tree.memory_bytes() + self.entries.len() * std::mem::size_of::<SiteEntry>()
     }
 
     /// The estimate at `p` (normal `n`): the [`INTERPOLATED_SITES`]
@@ -211,14 +210,7 @@ impl PrecomputedIrradiance {
         match search {
             SiteSearch::Cached => cache.sites.nearest(&self.tree, &q, g.max_radius, k, found),
             SiteSearch::Uncached => NeighbourCache::nearest_uncached(&self.tree, &q, g.max_radius, k, found),
-            SiteSearch::NearestOnly => {
-                found.clear();
-                found.extend(
-                    self.tree
-                        .nearest_one(&q)
-                        .filter(|nb| nb.distance <= g.max_radius * g.max_radius),
-                );
-            }
+            SiteSearch::NearestOnly => self.tree.nearest_n_within(&q, g.max_radius * g.max_radius, 1, found),
         }
         // No site within the maximum radius: at most a few unselected
         // photons (fewer than the stride) could be, a negligible term next
@@ -257,8 +249,7 @@ pub enum SiteSearch {
     /// without it, faster.
     Cached,
     /// The same sites from the tree alone (lookups in no particular
-    /// order, which the cache would rarely answer); the tree's distances
-    /// and ties may differ from the cache's in the last bit.
+    /// order, which the cache would rarely answer).
     Uncached,
     /// The nearest site alone, Christensen's lookup: its Voronoi cells
     /// show, but not after a diffuse bounce, and a cell's area is the
@@ -331,7 +322,7 @@ impl PhotonMap {
             .collect();
         let positions: Vec<[f32; 3]> = sites.par_iter().map(|s| to_tree(&rotation, s.position)).collect();
         drop(sites);
-        let (tree, order) = build_tree(positions, true);
+        let (tree, order) = SiteTree::build(positions);
         let entries = reorder(entries, &order);
         let reach2 = reach2(self.len() as f32 / entries.len().max(1) as f32, g.k.get());
         self.precomputed = Some(PrecomputedIrradiance { tree, entries, reach2 });
