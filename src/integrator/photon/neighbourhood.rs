@@ -76,7 +76,7 @@ impl NeighbourCache {
         tree.nearest_n_within(q, max_radius * max_radius, k.get(), out);
     }
 
-    /// The `k` nearest points of `tree` (its points kept) to `q` within
+    /// The `k` nearest points of `tree` to `q` within
     /// `max_radius`, into `out` nearest first (sorted, so that sums over the
     /// answer never depend on the cache): exactly, whatever
     /// the cache holds (ties at the k-th distance broken by item). A miss
@@ -137,8 +137,8 @@ impl NeighbourCache {
 
 /// Makes `entry` every point within `radius` of `q`, ranks them into `out`
 /// and tells whether that answer is exact (reaches less far than
-/// `radius`). The tree is searched a little wider than `radius`: its
-/// distances and ours may differ by rounding.
+/// `radius`). The tree is searched a little wider than `radius`: it
+/// compares squared distances, the exactness test their square roots.
 fn fill(
     entry: &mut Neighbourhood,
     tree: &SiteTree,

@@ -33,8 +33,9 @@
 //! `precomputed_follows_direct_across_stripes`.
 //!
 //! The sites are searched in their own k-d tree ([`SiteTree`]), made for
-//! one- and eight-site queries. Memory per site: 12 bytes in the tree, 12
-//! in the entry; one site per 8 photons adds ≈ 3 bytes per photon.
+//! one- and eight-site queries. Memory per site: 12 bytes for its position
+//! and about 8 for the tree's boxes, 12 in the entry; one site per 8
+//! photons adds ≈ 4 bytes per photon.
 
 use super::chunked::Neighbour;
 use super::gather::GatherParams;
@@ -190,8 +191,10 @@ impl PrecomputedIrradiance {
     /// times the site's area ([`SiteEntry::area`]),
     /// skipping sites whose normal differs; the direct gather when the
     /// nearest site is beyond its own radius or no site's normal agrees.
-    /// `cache` only makes the search faster (when `reuse`, from the
-    /// neighbourhoods of earlier lookups): the result does not depend on it.
+    /// [`SiteSearch::NearestOnly`] takes the nearest site's estimate alone.
+    /// `cache` only makes the search faster (with [`SiteSearch::Cached`],
+    /// from the neighbourhoods of earlier lookups): the result does not
+    /// depend on it.
     #[inline]
     pub(super) fn lookup(
         &self,

@@ -4,14 +4,14 @@
 //! the gather's maximum radius.
 //!
 //! kiddo's trees, which hold the photons, are built for 64-nearest
-//! gathers: leaves of 64 points, a result heap, and pruning by the split
-//! planes alone. The sites lie on surfaces, and most of a path's later
-//! vertices find none within the radius; split planes bound such a query
-//! badly (a cell spans the room between two walls). Here every node keeps
-//! the bounding box of its points, so a query is pruned by its distance to
-//! the points themselves, and most of those with no site near stop within
-//! a few nodes of the root; leaves hold [`LEAF`] points stored axis by
-//! axis, and the answer is a short sorted list.
+//! gathers: leaves of 64 points and a result heap, so a one-site query
+//! scans several leaves of 64. Here leaves hold [`LEAF`] points stored axis
+//! by axis, every node keeps the bounding box of its points (a query is
+//! pruned by its distance to the points, not to a split plane, and one
+//! beyond the whole set's reach stops at the root), the search follows the
+//! nearer child and defers the farther one, and the answer is a short
+//! sorted list. The measurements: `docs/benchmarks.md`, "The sites' own
+//! k-d tree".
 //!
 //! The tree is a balanced median split (Bentley 1975): each node halves its
 //! range of points at the median of its longest axis, ties ordered by the
@@ -71,11 +71,13 @@ impl SiteTree {
         assert!(points.len() <= u32::MAX as usize, "too many sites for u32 indices");
         let n = points.len();
         let mut tagged: Vec<([f32; 3], u32)> = points.into_iter().zip(0u32..).collect();
-        let mut boxes = vec![[[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]; if n == 0 { 0 } else { node_count(n) }];
-        let mut placed: Vec<(usize, Bounds)> = Vec::with_capacity(boxes.len());
+        let mut placed: Vec<(usize, Bounds)> = Vec::new();
         if n > 0 {
             split_range(&mut tagged, 0, &mut placed);
         }
+        // Heap order with the gaps a ragged last level leaves (never read).
+        let slots = placed.iter().map(|&(node, _)| node + 1).max().unwrap_or(0);
+        let mut boxes = vec![[[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]; slots];
         for (node, b) in placed {
             boxes[node] = b;
         }
@@ -171,10 +173,8 @@ impl SiteTree {
     /// position, in the tree's order, into `out` (cleared first).
     pub fn within_points(&self, q: &[f32; 3], r2: f32, out: &mut Vec<([f32; 3], u32)>) {
         out.clear();
-        self.search(q, r2, |item, d2| {
-            if d2 <= r2 {
-                out.push((self.point(item), item as u32));
-            }
+        self.search(q, r2, |item, _| {
+            out.push((self.point(item), item as u32));
             r2
         });
     }
@@ -235,19 +235,6 @@ impl SiteTree {
             (node, lo, hi) = (0, 0, 0);
         }
     }
-}
-
-/// Nodes of a tree of `n > 0` points in heap order, leaves included (with
-/// the gaps a ragged last level leaves).
-fn node_count(n: usize) -> usize {
-    fn last(lo: usize, hi: usize, node: usize) -> usize {
-        if hi - lo <= LEAF {
-            return node;
-        }
-        let m = mid(lo, hi);
-        last(m, hi, 2 * node + 2).max(last(lo, m, 2 * node + 1))
-    }
-    last(0, n, 0) + 1
 }
 
 /// The box of `points`.
